@@ -1,0 +1,112 @@
+"""What every method returns, and the output table of contract section 3."""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+from numpy.typing import NDArray
+
+from sideslip.drive import _atomic_write, save_table
+
+FloatArray = NDArray[np.float64]
+
+# Series names of the contract (section 3); methods may add others (e.g. 'yaw_std', 'e_std').
+CONTRACT_SERIES = (
+    "beta", "r", "yaw", "roll", "bank", "e", "n", "vx", "vy", "gyro_bias", "ay_bias", "beta_std",
+)  # fmt: skip
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """A method's result on a drive's time base.
+
+    ``series`` maps names such as ``beta`` (rad, at the CG), ``r`` (rad/s), ``yaw``, ``roll``,
+    ``bank`` (rad), ``e``/``n`` (m, ENU), ``vx``/``vy`` (m/s), ``gyro_bias`` (rad/s), ``ay_bias``
+    (m/s^2) and 1-sigma series ``<name>_std`` to arrays as long as ``t``.  ``params`` holds
+    identified parameters and diagnostics (JSON-serialisable: numbers, strings, lists, dicts).
+    """
+
+    method: str
+    t: FloatArray
+    series: Mapping[str, FloatArray]
+    params: Mapping[str, Any] = field(default_factory=dict)
+
+    def __getitem__(self, name: str) -> FloatArray:
+        return self.series[name]
+
+
+def check_estimate(est: Estimate, n: int) -> None:
+    """Fail loudly (a bug, not a user error) if a method broke the output promise."""
+    for name, values in est.series.items():
+        arr = np.asarray(values)
+        if arr.shape != (n,):
+            raise RuntimeError(f"method {est.method}: series '{name}' has shape {arr.shape}, not ({n},)")
+        if not np.isfinite(arr).all():
+            row = int(np.argmax(~np.isfinite(arr))) + 1
+            raise RuntimeError(f"method {est.method}: series '{name}' is not finite at row {row}")
+
+
+def _jsonable(value: Any) -> Any:
+    if isinstance(value, Mapping):
+        return {str(k): _jsonable(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_jsonable(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return _jsonable(value.tolist())
+    if isinstance(value, np.generic):
+        return _jsonable(value.item())
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
+
+
+def estimates_frame(t: FloatArray, estimates: Sequence[Estimate]) -> pd.DataFrame:
+    """One table: ``t`` and ``M.<series>`` for each method M (contract section 3)."""
+    cols: dict[str, FloatArray] = {"t": t}
+    for est in estimates:
+        for name, values in est.series.items():
+            cols[f"{est.method}.{name}"] = np.asarray(values, dtype=float)
+    return pd.DataFrame(cols)
+
+
+def params_path(table_path: Path) -> Path:
+    """Identified parameters beside the table: ``est.parquet`` -> ``est.params.json``."""
+    return table_path.with_name(table_path.stem + ".params.json")
+
+
+def save_estimates(
+    t: FloatArray, estimates: Sequence[Estimate], path: str | Path, meta: Mapping[str, Any] | None = None
+) -> Path:
+    """Write the estimate table and its parameter JSON; returns the JSON path."""
+    p = Path(path)
+    frame = estimates_frame(t, estimates)
+    params = {est.method: _jsonable(dict(est.params)) for est in estimates}
+    save_table(frame, p, meta)
+    jp = params_path(p)
+    _atomic_write(jp, lambda tmp: tmp.write_text(json.dumps(params, indent=2)))
+    return jp
+
+
+def load_estimates(path: str | Path) -> dict[str, dict[str, FloatArray]]:
+    """Read an estimate table back as method -> series -> array (plus '' -> {'t': t})."""
+    from sideslip.drive import read_table
+    from sideslip.errors import InputError
+
+    frame, _ = read_table(path)
+    if "t" not in frame.columns:
+        raise InputError(str(path), "required column is missing: expected time stamps in s", column="t")
+    out: dict[str, dict[str, FloatArray]] = {"": {"t": frame["t"].to_numpy(dtype=float)}}
+    for col in frame.columns:
+        if "." not in str(col):
+            continue
+        method, name = str(col).split(".", 1)
+        values = pd.to_numeric(frame[col], errors="coerce").to_numpy(dtype=float)
+        out.setdefault(method, {})[name] = values
+    return out

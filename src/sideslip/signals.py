@@ -1,0 +1,164 @@
+"""Signal helpers shared by the methods: alignment, speed, GNSS course, standstill, reversing.
+
+Slower sensors leave NaN on rows where they have no sample (contract section 1).  Methods that
+need a value at every row use a *zero-order hold* of the latest real sample together with its
+age, never an interpolated future value: no sample is invented, and a filter can tell a fresh
+measurement (age 0) from a held one.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from sideslip.drive import WHEEL_SPEEDS, Drive
+from sideslip.frames import wrap_angle
+
+FloatArray = NDArray[np.float64]
+BoolArray = NDArray[np.bool_]
+
+STANDSTILL_SPEED = 0.1  # m/s: below this the vehicle is taken as standing still
+GNSS_COURSE_MIN_SPEED = 3.0  # m/s: below this a Doppler course is too noisy to use
+
+
+def sample_rows(values: FloatArray) -> NDArray[np.intp]:
+    """Row indices where a sensor has a real sample (finite value)."""
+    return np.flatnonzero(np.isfinite(values))
+
+
+def hold(values: FloatArray, t: FloatArray, fill: float = 0.0) -> tuple[FloatArray, FloatArray]:
+    """Zero-order hold of a sparse series onto every row.
+
+    Returns ``(held, age_s)``: the latest real sample at or before each row, and its age in s.
+    Rows before the first sample get ``fill`` with age ``inf``.
+    """
+    ok = np.isfinite(values)
+    idx = np.where(ok, np.arange(values.size), -1)
+    np.maximum.accumulate(idx, out=idx)
+    held = np.where(idx >= 0, values[np.maximum(idx, 0)], fill)
+    age = np.where(idx >= 0, t - t[np.maximum(idx, 0)], np.inf)
+    return held.astype(float), age.astype(float)
+
+
+def interpolate(values: FloatArray, t: FloatArray, max_gap_s: float = np.inf) -> FloatArray:
+    """Linear interpolation between real samples (offline use), NaN across gaps > max_gap_s.
+
+    Outside the first/last sample the series is held constant.  Rows in a gap longer than
+    ``max_gap_s`` stay NaN so that callers see the gap.
+    """
+    ok = np.isfinite(values)
+    if not ok.any():
+        return np.full_like(t, np.nan)
+    out = np.interp(t, t[ok], values[ok])
+    if np.isfinite(max_gap_s):
+        ts = t[ok]
+        k = np.clip(np.searchsorted(ts, t), 1, ts.size - 1) if ts.size > 1 else None
+        if k is not None:
+            gap = ts[k] - ts[k - 1]
+            inside = (t > ts[0]) & (t < ts[-1])
+            out[inside & (gap > max_gap_s)] = np.nan
+    return out
+
+
+def wheel_speed(drive: Drive, prefer: str = "rear") -> FloatArray | None:
+    """Vehicle speed (m/s) from wheel speeds: mean of the rear (undriven on FWD cars) or all.
+
+    ``prefer='rear'`` uses the rear pair when both exist, else every wheel present.  Rows with no
+    wheel sample stay NaN.  Returns None when the drive has no wheel speed.
+    """
+    names = ("v_rl", "v_rr") if prefer == "rear" else WHEEL_SPEEDS
+    cols = [drive[n] for n in names if n in drive]
+    if len(cols) < (2 if prefer == "rear" else 1):
+        cols = [drive[n] for n in WHEEL_SPEEDS if n in drive]
+    if not cols:
+        return None
+    stack = np.vstack(cols)
+    with np.errstate(invalid="ignore"):
+        count = np.isfinite(stack).sum(axis=0)
+        total = np.nansum(stack, axis=0)
+    return np.where(count > 0, total / np.maximum(count, 1), np.nan)
+
+
+def vehicle_speed(drive: Drive) -> FloatArray:
+    """Signed longitudinal speed (m/s) on every row, held between samples, never NaN.
+
+    Source order: rear wheel speeds, any wheel speeds, CAN speed, GNSS horizontal speed.  A
+    drive with none of them gives zeros.  Use :func:`speed_source` to know which was used.
+    """
+    raw = speed_raw(drive)
+    if raw is None:
+        return np.zeros_like(drive.t)
+    held, _ = hold(raw, drive.t, fill=float(raw[np.isfinite(raw)][0]) if np.isfinite(raw).any() else 0.0)
+    return held
+
+
+def speed_source(drive: Drive) -> str:
+    """Which column(s) :func:`vehicle_speed` reads: 'wheels', 'v_can', 'gnss' or 'none'."""
+    if wheel_speed(drive) is not None:
+        return "wheels"
+    if "v_can" in drive:
+        return "v_can"
+    if "gnss_ve" in drive and "gnss_vn" in drive:
+        return "gnss"
+    return "none"
+
+
+def speed_raw(drive: Drive) -> FloatArray | None:
+    """The speed samples behind :func:`vehicle_speed` (NaN between samples), or None."""
+    ws = wheel_speed(drive)
+    if ws is not None:
+        return ws
+    if "v_can" in drive:
+        return drive["v_can"]
+    if "gnss_ve" in drive and "gnss_vn" in drive:
+        return np.hypot(drive["gnss_ve"], drive["gnss_vn"])
+    return None
+
+
+def gnss_course(
+    drive: Drive, min_speed: float = GNSS_COURSE_MIN_SPEED
+) -> tuple[NDArray[np.intp], FloatArray, FloatArray]:
+    """GNSS Doppler course over ground at GNSS rows above a speed gate.
+
+    Returns ``(rows, course_rad, speed_mps)``: course = atan2(v_n, v_e) (ENU, from East,
+    counter-clockwise), only where the horizontal Doppler speed exceeds ``min_speed``.
+    Falls back to differencing GNSS positions when the drive has no Doppler velocity.
+    """
+    if "gnss_ve" in drive and "gnss_vn" in drive:
+        ve, vn = drive["gnss_ve"], drive["gnss_vn"]
+    elif "gnss_e" in drive and "gnss_n" in drive:
+        rows = sample_rows(drive["gnss_e"])
+        ve = np.full_like(drive.t, np.nan)
+        vn = np.full_like(drive.t, np.nan)
+        if rows.size >= 2:
+            dt = np.diff(drive.t[rows])
+            mid_e = np.diff(drive["gnss_e"][rows]) / dt
+            mid_n = np.diff(drive["gnss_n"][rows]) / dt
+            ve[rows[1:]] = mid_e
+            vn[rows[1:]] = mid_n
+    else:
+        empty = np.zeros(0, dtype=np.intp)
+        return empty, np.zeros(0), np.zeros(0)
+    speed = np.hypot(ve, vn)
+    rows = np.flatnonzero(np.isfinite(speed) & (speed > min_speed))
+    return rows, np.arctan2(vn[rows], ve[rows]), speed[rows]
+
+
+def standstill(drive: Drive, speed_threshold: float = STANDSTILL_SPEED) -> BoolArray:
+    """Rows where the vehicle stands still (|speed| below ``speed_threshold`` m/s)."""
+    return np.abs(vehicle_speed(drive)) < speed_threshold
+
+
+def reversing(drive: Drive, speed_threshold: float = STANDSTILL_SPEED) -> BoolArray:
+    """Rows where the vehicle moves backwards.
+
+    Signed wheel or CAN speeds below ``-speed_threshold`` mark reversing.  Drives whose speed
+    sensors report magnitudes only cannot show reversing this way; methods that have a heading
+    also compare it with the GNSS course (a course opposite to the heading means reversing).
+    """
+    return vehicle_speed(drive) < -speed_threshold
+
+
+def course_from_velocity(ve: FloatArray, vn: FloatArray) -> FloatArray:
+    """Course over ground atan2(v_n, v_e), rad, wrapped to [-pi, pi)."""
+    return wrap_angle(np.arctan2(vn, ve))

@@ -1,0 +1,213 @@
+"""Vehicle parameters (contract section 2): TOML loading, presets, derived quantities.
+
+Cornering stiffness ``cf``/``cr`` is per axle in N/rad.  Papers that quote it per tyre
+(seed 003, seed 000's ``K_r``) are converted on the way in: per-axle = 2 x per-tyre.
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass, fields
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+from sideslip.errors import InputError
+
+G = 9.80665  # standard gravity, m/s^2
+
+# name -> (unit, lower bound, upper bound): bounds are "absurd" limits, not typical ranges.
+PARAMETERS: dict[str, tuple[str, float, float]] = {
+    "mass": ("kg", 100.0, 60000.0),
+    "yaw_inertia": ("kg m^2", 10.0, 1.0e6),
+    "lf": ("m", 0.1, 10.0),
+    "lr": ("m", 0.1, 10.0),
+    "cf": ("N/rad", 1.0e3, 5.0e6),
+    "cr": ("N/rad", 1.0e3, 5.0e6),
+    "track_front": ("m", 0.5, 3.5),
+    "track_rear": ("m", 0.5, 3.5),
+    "cg_height": ("m", 0.1, 3.0),
+    "roll_axis_height": ("m", -0.5, 3.0),
+    "roll_stiffness": ("N m/rad", 1.0e3, 1.0e7),
+    "roll_damping": ("N m s/rad", 10.0, 1.0e6),
+    "roll_inertia": ("kg m^2", 5.0, 1.0e6),
+    "steering_ratio": ("-", 1.0, 40.0),
+}
+OPTIONAL_PARAMETERS: dict[str, tuple[str, float, float]] = {
+    "understeer_gradient": ("rad/(m/s^2)", -0.05, 0.05),
+}
+
+
+@dataclass(frozen=True)
+class Vehicle:
+    """Vehicle parameters in SI units.  A parameter the file lacks is NaN; use :meth:`need`.
+
+    Attributes are those of the contract: ``mass`` (kg), ``yaw_inertia`` (kg m^2), ``lf``/``lr``
+    (CG to front/rear axle, m), ``cf``/``cr`` (cornering stiffness per axle, N/rad),
+    ``track_front``/``track_rear`` (m), ``cg_height`` (m above ground), ``roll_axis_height``
+    (m above ground), ``roll_stiffness`` (N m/rad), ``roll_damping`` (N m s/rad),
+    ``roll_inertia`` (kg m^2, about the roll axis), ``steering_ratio`` (steering-wheel angle
+    over road-wheel angle), ``understeer_gradient`` (rad/(m/s^2); NaN -> derived from the
+    tyres), lever arms ``imu_xyz``/``gnss_xyz`` (m from the CG, vehicle axes).
+    """
+
+    name: str
+    source: str
+    mass: float = math.nan
+    yaw_inertia: float = math.nan
+    lf: float = math.nan
+    lr: float = math.nan
+    cf: float = math.nan
+    cr: float = math.nan
+    track_front: float = math.nan
+    track_rear: float = math.nan
+    cg_height: float = math.nan
+    roll_axis_height: float = math.nan
+    roll_stiffness: float = math.nan
+    roll_damping: float = math.nan
+    roll_inertia: float = math.nan
+    steering_ratio: float = math.nan
+    understeer_gradient_given: float = math.nan
+    imu_xyz: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    gnss_xyz: tuple[float, float, float] = (0.0, 0.0, 0.0)
+
+    # ---- access ---------------------------------------------------------------------
+    def missing(self, names: tuple[str, ...] | list[str]) -> list[str]:
+        """Names among ``names`` whose value the vehicle file did not give."""
+        out = []
+        for name in names:
+            value = getattr(self, name)
+            if isinstance(value, float) and not math.isfinite(value):
+                out.append(name)
+        return out
+
+    def need(self, *names: str) -> None:
+        """Raise :class:`InputError` naming the first parameter among ``names`` that is missing."""
+        for name in self.missing(list(names)):
+            raise InputError(
+                self.source,
+                f"parameter '{name}' is needed here but the vehicle file does not give it",
+                column=None,
+            )
+
+    # ---- derived quantities -----------------------------------------------------------
+    @property
+    def wheelbase(self) -> float:
+        """L = lf + lr, m."""
+        return self.lf + self.lr
+
+    @property
+    def understeer_gradient_tyres(self) -> float:
+        """K_us = m/L (lr/cf - lf/cr), rad/(m/s^2), from the linear single-track model."""
+        return self.mass / self.wheelbase * (self.lr / self.cf - self.lf / self.cr)
+
+    @property
+    def understeer_gradient(self) -> float:
+        """The file's understeer gradient if given, else :attr:`understeer_gradient_tyres`."""
+        if math.isfinite(self.understeer_gradient_given):
+            return self.understeer_gradient_given
+        return self.understeer_gradient_tyres
+
+    @property
+    def characteristic_speed(self) -> float:
+        """v_ch = sqrt(L/K_us), m/s, where the yaw-rate gain r/delta peaks (inf if K_us <= 0)."""
+        kus = self.understeer_gradient
+        return math.sqrt(self.wheelbase / kus) if kus > 0 else math.inf
+
+    @property
+    def slip_gain_k(self) -> float:
+        """Seed 000's slip gain K = m lf / (2 L K_r), s^2/m, with K_r per tyre (= cr/2).
+
+        Steady-state linear single-track: the sideslip at the rear-axle centre is
+        beta_r = -K a_y.  With per-axle cr this is K = m lf / (L cr).
+        """
+        k_r_per_tyre = self.cr / 2.0
+        return self.mass * self.lf / (2.0 * self.wheelbase * k_r_per_tyre)
+
+    @property
+    def static_roll_gain(self) -> float:
+        """Steady-state suspension roll per lateral acceleration, rad/(m/s^2): m h / k.
+
+        h is the CG height above the roll axis (seed 003 eq 41, steady state eq 43).
+        """
+        return self.mass * (self.cg_height - self.roll_axis_height) / self.roll_stiffness
+
+    def with_changes(self, **changes: Any) -> Vehicle:
+        """A copy with some parameters replaced (e.g. a 30 % wrong cornering stiffness)."""
+        values = {f.name: getattr(self, f.name) for f in fields(self)}
+        values.update(changes)
+        return Vehicle(**values)
+
+
+def _parse(table: dict[str, Any], source: str, name: str) -> Vehicle:
+    if "vehicle" not in table or not isinstance(table["vehicle"], dict):
+        raise InputError(source, "expected a [vehicle] table with the contract's parameters")
+    veh = table["vehicle"]
+    values: dict[str, Any] = {}
+    for key, (unit, lo, hi) in {**PARAMETERS, **OPTIONAL_PARAMETERS}.items():
+        if key not in veh:
+            if key in PARAMETERS and key in ("mass", "lf", "lr"):
+                raise InputError(
+                    source, f"parameter '{key}' is missing: expected a number in {unit}"
+                )
+            continue
+        raw = veh[key]
+        if isinstance(raw, bool) or not isinstance(raw, int | float) or not math.isfinite(raw):
+            raise InputError(source, f"parameter '{key}' = {raw!r}: expected a number in {unit}")
+        if not lo <= float(raw) <= hi:
+            raise InputError(
+                source,
+                f"parameter '{key}' = {raw} {unit} is absurd: expected {lo:g} to {hi:g} {unit}",
+            )
+        field_name = "understeer_gradient_given" if key == "understeer_gradient" else key
+        values[field_name] = float(raw)
+    sensors = table.get("sensors", veh.get("sensors", {}))
+    if isinstance(sensors, dict):
+        for key in ("imu_xyz", "gnss_xyz"):
+            if key in sensors:
+                arm = sensors[key]
+                ok = isinstance(arm, list) and len(arm) == 3
+                ok = ok and all(isinstance(a, int | float) and abs(a) < 20 for a in arm)
+                if not ok:
+                    raise InputError(
+                        source,
+                        f"parameter 'sensors.{key}' = {arm!r}: expected [x, y, z] in m "
+                        "from the CG, each within 20 m",
+                    )
+                values[key] = tuple(float(a) for a in arm)
+    return Vehicle(name=str(veh.get("name", name)), source=source, **values)
+
+
+def preset_names() -> list[str]:
+    """Names of the vehicle presets shipped with the package."""
+    folder = resources.files("sideslip") / "presets"
+    return sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith(".toml"))
+
+
+def load_vehicle(name_or_path: str | Path) -> Vehicle:
+    """Load a vehicle by preset name (see :func:`preset_names`) or by TOML file path."""
+    text = str(name_or_path)
+    path = Path(text)
+    if path.suffix == ".toml" or path.exists():
+        source = text
+        try:
+            raw = path.read_bytes()
+        except OSError as exc:
+            raise InputError(source, f"cannot read vehicle file ({exc.strerror})") from None
+        stem = path.stem
+    else:
+        if text not in preset_names():
+            raise InputError(
+                text,
+                "no such vehicle file or preset: expected a .toml path or one of "
+                + ", ".join(preset_names()),
+            )
+        source = f"preset:{text}"
+        raw = (resources.files("sideslip") / "presets" / f"{text}.toml").read_bytes()
+        stem = text
+    try:
+        table = tomllib.loads(raw.decode("utf-8"))
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        raise InputError(source, f"not valid TOML ({exc})") from None
+    return _parse(table, source, stem)
