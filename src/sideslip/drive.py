@@ -147,8 +147,7 @@ def validate_frame(frame: pd.DataFrame, path: str) -> dict[str, np.ndarray]:
                 row = _first_row(bad)
                 raise InputError(
                     path,
-                    f"expected a number in {COLUMNS.get(name_s, 'deg or m')}, "
-                    f"got {series.iloc[row - 1]!r}",
+                    f"expected a number in {COLUMNS.get(name_s, 'deg or m')}, got {series.iloc[row - 1]!r}",
                     column=name_s,
                     row=row,
                 )
@@ -169,8 +168,7 @@ def validate_frame(frame: pd.DataFrame, path: str) -> dict[str, np.ndarray]:
     if t.size == 0:
         raise InputError(path, "expected at least one row of data", column="t")
     if np.isnan(t).any():
-        raise InputError(path, "expected a time stamp in every row", column="t",
-                         row=_first_row(np.isnan(t)))
+        raise InputError(path, "expected a time stamp in every row", column="t", row=_first_row(np.isnan(t)))
     steps = np.diff(t)
     if (steps <= 0).any():
         i = int(np.argmax(steps <= 0))
@@ -197,8 +195,12 @@ def validate_frame(frame: pd.DataFrame, path: str) -> dict[str, np.ndarray]:
     for name in ("gnss_pos_std", "gnss_vel_std"):
         col = out.get(name)
         if col is not None and (np.nan_to_num(col) < 0).any():
-            raise InputError(path, "expected a standard deviation >= 0", column=name,
-                             row=_first_row(np.nan_to_num(col) < 0))
+            raise InputError(
+                path,
+                "expected a standard deviation >= 0",
+                column=name,
+                row=_first_row(np.nan_to_num(col) < 0),
+            )
     out["t"] = t
     return out
 
@@ -212,8 +214,7 @@ def _geodetic_to_enu(cols: dict[str, np.ndarray], meta: dict[str, Any], path: st
         ok = np.isfinite(lat) & np.isfinite(lon)
         bad = ok & ((np.abs(lat) > 90) | (np.abs(lon) > 180))
         if bad.any():
-            raise InputError(path, "expected latitude/longitude in degrees", column=la,
-                             row=_first_row(bad))
+            raise InputError(path, "expected latitude/longitude in degrees", column=la, row=_first_row(bad))
         if "origin" not in meta:
             if not ok.any():
                 continue

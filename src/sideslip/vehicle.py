@@ -148,9 +148,7 @@ def _parse(table: dict[str, Any], source: str, name: str) -> Vehicle:
     for key, (unit, lo, hi) in {**PARAMETERS, **OPTIONAL_PARAMETERS}.items():
         if key not in veh:
             if key in PARAMETERS and key in ("mass", "lf", "lr"):
-                raise InputError(
-                    source, f"parameter '{key}' is missing: expected a number in {unit}"
-                )
+                raise InputError(source, f"parameter '{key}' is missing: expected a number in {unit}")
             continue
         raw = veh[key]
         if isinstance(raw, bool) or not isinstance(raw, int | float) or not math.isfinite(raw):

@@ -60,9 +60,7 @@ def register(
     def deco(func: MethodFunc) -> MethodFunc:
         if name in _REGISTRY and _REGISTRY[name].func is not func:
             raise ValueError(f"method {name!r} registered twice")
-        _REGISTRY[name] = Method(
-            name, func, tuple(columns), tuple(vehicle_params), summary, paper
-        )
+        _REGISTRY[name] = Method(name, func, tuple(columns), tuple(vehicle_params), summary, paper)
         return func
 
     return deco
