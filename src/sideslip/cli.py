@@ -202,6 +202,16 @@ def _parse_windows(values: list[str] | None) -> list[Any]:
     return out
 
 
+def _check_same_time_base(drive: Any, est: dict[str, Any], est_path: Path) -> None:
+    t_est = est[""]["t"]
+    if t_est.size != len(drive) or not np.allclose(t_est, drive.t, rtol=0, atol=1e-6):
+        raise InputError(
+            str(est_path),
+            "expected the drive's time stamps (estimate made from another drive?)",
+            column="t",
+        )
+
+
 def metrics_table(results: dict[str, dict[str, float]], title: str) -> Table:
     """A rich table of method -> metric values (the contract's metric names as columns)."""
     from sideslip.evaluate import METRIC_NAMES
@@ -271,9 +281,18 @@ def report_cmd(
     from sideslip.drive import load_drive
     from sideslip.estimate import load_estimates
 
+    from sideslip.estimate import params_path
+
+    if out.suffix.lower() not in (".html", ".htm"):
+        raise InputError(str(out), "expected an output path ending in .html")
     drive = load_drive(drive_path)
     est = load_estimates(est_path)
-    write_report(drive, est, out)
+    _check_same_time_base(drive, est, est_path)
+    params = None
+    pj = params_path(est_path)
+    if pj.is_file():
+        params = json.loads(pj.read_text())
+    write_report(drive, est, out, params)
     console.print(f"wrote {out}")
 
 
@@ -352,7 +371,8 @@ def demo_cmd(
         console.print(f"estimates: {est_path}; metrics: {out_dir / (scenario + '_metrics.json')}")
     else:
         report = out_dir / f"{scenario}_report.html"
-        write_report(drive, {"": {"t": drive.t}, **series}, report)
+        write_report(drive, {"": {"t": drive.t}, **series}, report,
+                     {e.method: dict(e.params) for e in estimates})
         console.print(f"report: {report}")
     console.print(f"done in {time.perf_counter() - start:.1f} s")
 

@@ -1,0 +1,409 @@
+"""Fused sideslip estimator: one error-aware filter/smoother over every sensor the drive has.
+
+None of the five papers combines their strengths; this method does, in one extended Kalman
+filter (``fused_filter``, causal) and its Rauch-Tung-Striebel smoother (``fused``, off-line,
+the toolkit's best estimate).
+
+State (10): x = [e, n (CG position, ENU, m), psi (yaw, rad), v_x, v_y (CG velocity in the
+heading frame, m/s), b_g (gyro z bias, rad/s), c_y (lateral specific-force offset: g sin(bank)
++ accelerometer y bias, m/s^2), c_x (longitudinal offset: -g sin(pitch) + accelerometer x bias,
+m/s^2), s_w (wheel-speed scale factor, -), K (slip gain, s^2/m), s_g (gyro scale factor, -)].
+
+Process model (kinematics of a rigid body in the plane, IMU as input):
+    e' = v_x cos psi - v_y sin psi,    n' = v_x sin psi + v_y cos psi
+    psi' = r,                          r = (1 - s_g) w_z,m - b_g   (seed 001: the scale factor
+                                       is what breaks a kinematic filter through turns)
+    v_x' = a_x,m - c_x + r v_y
+    v_y' = a_y,m - c_y - g k_phi a_y,m - r v_x      (k_phi: suspension roll per lateral accel)
+    b_g', c_y', c_x', s_w', K' = white noise (random walks)
+The suspension-roll term uses the sign convention of the package: the accelerometer reads
+a_y + g sin(roll) with roll = bank + roll_sus, roll_sus ~ k_phi a_y (seed 003 eq 43).
+
+Measurements:
+    wheel speed      v_w = s_w v_x                      (mean of rear wheels, else wheels/CAN)
+    GNSS Doppler     [v_e, v_n] at the antenna = v + omega x l (roll/pitch rates from the
+                     gyro: a roof antenna 1.3 m up sees roll rate x 1.3 m, as large as v_y)
+    GNSS position    [e, n] at the antenna               (innovation-gated against multipath)
+    slip relation    0 = v_y - l_r r + K f_y v_x + noise (seed 000 eqs 5-14: rear-axle slip
+                     beta_r = (v_y - l_r r)/v_x = -K f_y, with f_y = a_y,m (1 - g k_phi) the
+                     tyre lateral force per mass: the accelerometer reading less the suspension
+                     roll's gravity term, so road bank is included as seed 000 eq 14 asks.
+                     K is *identified on-line* from GNSS in curves, starting from the vehicle
+                     file's m l_f / (L c_r) with a wide prior; the noise grows with
+                     |K f_y v_x| (30 %) to carry tyre nonlinearity)
+    standstill       v_x = 0, v_y = 0, r = 0 when the wheels stand (gyro bias observable)
+
+Everything is linearised about the current estimate (EKF), discretised by first-order Euler at
+the IMU rate, and stored for the RTS backward pass; memory is O(N) (10x10 per row).  Offline,
+the smoother uses every GNSS sample on both sides of an outage, which is why it beats filters.
+The slip relation is an assumption of linear rear-tyre behaviour: near the friction limit it
+under-predicts slip, which the GNSS velocity corrects when it is there.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numba
+import numpy as np
+from numpy.typing import NDArray
+
+from sideslip.drive import Drive
+from sideslip.estimate import Estimate
+from sideslip.methods.registry import SPEED, register
+from sideslip.signals import gnss_course, speed_raw
+from sideslip.vehicle import G, Vehicle
+
+NX = 11
+IE, IN, IPSI, IVX, IVY, IBG, ICY, ICX, ISW, IK, ISG = range(NX)
+
+
+@dataclass(frozen=True)
+class FusedNoise:
+    """Noise settings (1-sigma), SI units; defaults for MEMS IMU, automotive wheel speeds and a
+    u-blox M8-class receiver.  ``*_psd`` are continuous random-walk densities per sqrt(s)."""
+
+    accel_sigma: float = 0.15  # m/s^2, accelerometer noise + unmodelled vibration (per sample)
+    gyro_sigma: float = 0.005  # rad/s, gyro noise as a process-noise density per sqrt(s)
+    gyro_bias_psd: float = 2e-5  # rad/s/sqrt(s)
+    cy_psd: float = 0.03  # m/s^2/sqrt(s): bank changes along the road
+    cx_psd: float = 0.05  # m/s^2/sqrt(s): grade changes
+    sw_psd: float = 1e-5  # 1/sqrt(s): wheel-speed scale factor drift
+    k_psd: float = 2e-6  # s^2/m/sqrt(s): slip gain drift
+    sg_psd: float = 1e-5  # 1/sqrt(s): gyro scale-factor drift
+    wheel_sigma: float = 0.05  # m/s
+    gnss_vel_sigma: float = 0.1  # m/s, used when the drive has no gnss_vel_std
+    gnss_pos_sigma: float = 2.0  # m, used when the drive has no gnss_pos_std
+    slip_sigma: float = 0.05  # m/s floor on the slip-relation residual (in v_y)
+    slip_rel: float = 0.3  # relative error of the linear slip relation
+    gate_chi2: float = 16.0  # innovation gate (chi^2, per measurement block) for GNSS
+    standstill_speed: float = 0.05  # m/s: wheels slower than this stand still
+    force_tau_s: float = 0.15  # s: low-pass of the lateral force in the slip relation
+    k_curve_accel: float = 1.0  # m/s^2: K is learned only where |f_y| exceeds this
+
+
+@numba.njit(cache=True)
+def _update(x, P, H, z, zhat, R, gate):  # type: ignore[no-untyped-def]
+    """Joseph-form EKF update with a chi^2 gate; returns True when applied."""
+    y = z - zhat
+    S = H @ P @ H.T + R
+    Sinv = np.linalg.inv(S)
+    d2 = y @ Sinv @ y
+    if gate > 0.0 and d2 > gate:
+        return False
+    Kg = P @ H.T @ Sinv
+    x += Kg @ y
+    IKH = np.eye(x.size) - Kg @ H
+    P[:, :] = IKH @ P @ IKH.T + Kg @ R @ Kg.T
+    return True
+
+
+@numba.njit(cache=True)
+def _predict(x, P, dt, wz, ax, ay, q, k_phi, accel_sigma, gyro_sigma):  # type: ignore[no-untyped-def]
+    """One Euler step of the process model: returns (x_pred, P_pred, F)."""
+    r = (1.0 - x[ISG]) * wz - x[IBG]
+    c, s = math.cos(x[IPSI]), math.sin(x[IPSI])
+    vx, vy = x[IVX], x[IVY]
+    F = np.eye(NX)
+    F[IE, IPSI] = dt * (-vx * s - vy * c)
+    F[IE, IVX] = dt * c
+    F[IE, IVY] = -dt * s
+    F[IN, IPSI] = dt * (vx * c - vy * s)
+    F[IN, IVX] = dt * s
+    F[IN, IVY] = dt * c
+    F[IPSI, IBG] = -dt
+    F[IPSI, ISG] = -dt * wz
+    F[IVX, IVY] = dt * r
+    F[IVX, IBG] = -dt * vy
+    F[IVX, ISG] = -dt * vy * wz
+    F[IVX, ICX] = -dt
+    F[IVY, IVX] = -dt * r
+    F[IVY, IBG] = dt * vx
+    F[IVY, ISG] = dt * vx * wz
+    F[IVY, ICY] = -dt
+    xn = x.copy()
+    xn[IE] += dt * (vx * c - vy * s)
+    xn[IN] += dt * (vx * s + vy * c)
+    xn[IPSI] += dt * r
+    xn[IVX] += dt * (ax - x[ICX] + r * vy)
+    xn[IVY] += dt * (ay * (1.0 - G * k_phi) - x[ICY] - r * vx)
+    Pn = F @ P @ F.T
+    for i in range(NX):
+        Pn[i, i] += q[i] * dt
+    # gyro noise enters psi, v_x, v_y through r; accelerometer noise through v_x, v_y
+    Pn[IPSI, IPSI] += gyro_sigma**2 * dt
+    Pn[IVX, IVX] += (accel_sigma**2 + (vy * gyro_sigma) ** 2) * dt
+    Pn[IVY, IVY] += (accel_sigma**2 + (vx * gyro_sigma) ** 2) * dt
+    return xn, Pn, F
+
+
+@numba.njit(cache=True)
+def _run(  # type: ignore[no-untyped-def]
+    t, wz, wx, wy, ax, ay, fy_lp, vw, ve, vn, vstd, ge, gn, pstd, x0, P0, q, lever, lr, k_phi,
+    noise, smooth,
+):
+    """Forward EKF over all rows, then (``smooth``) the RTS backward pass.
+
+    Only the filtered x and P are stored (O(N) memory, 10x10 per row); the backward pass
+    recomputes each prediction and its Jacobian from the filtered state, which is exact
+    because the prediction is a deterministic function of it.
+    """
+    n = t.size
+    xs = np.zeros((n, NX))
+    Ps = np.zeros((n, NX, NX))
+    x = x0.copy()
+    P = P0.copy()
+    wheel_sigma, slip_sigma, slip_rel, gate, still = noise[0], noise[1], noise[2], noise[3], noise[4]
+    accel_sigma, gyro_sigma, k_curve = noise[5], noise[6], noise[7]
+    accepted = 0
+    rejected = 0
+    lx, ly, lz = lever[0], lever[1], lever[2]
+    for k in range(n):
+        if k > 0:
+            x, P, _ = _predict(x, P, t[k] - t[k - 1], wz[k - 1], ax[k - 1], ay[k - 1], q, k_phi,
+                               accel_sigma, gyro_sigma)
+        r = (1.0 - x[ISG]) * wz[k] - x[IBG]
+        # ---- standstill: zero velocity and zero yaw rate
+        if math.isfinite(vw[k]) and abs(vw[k]) < still:
+            H = np.zeros((3, NX))
+            H[0, IVX] = 1.0
+            H[1, IVY] = 1.0
+            H[2, IBG] = -1.0
+            H[2, ISG] = -wz[k]
+            z = np.array([0.0, 0.0, 0.0])
+            zhat = np.array([x[IVX], x[IVY], r])
+            R = np.diag(np.array([1e-4, 1e-4, gyro_sigma**2]))
+            _update(x, P, H, z, zhat, R, -1.0)
+        elif math.isfinite(vw[k]):
+            # ---- wheel speed
+            H = np.zeros((1, NX))
+            H[0, IVX] = x[ISW]
+            H[0, ISW] = x[IVX]
+            _update(x, P, H, np.array([vw[k]]), np.array([x[ISW] * x[IVX]]),
+                    np.array([[wheel_sigma**2]]), -1.0)
+            # ---- slip relation (linear rear tyre), at the wheel-speed rate
+            vx = x[IVX]
+            if vx > 1.0:
+                fy = fy_lp[k]  # tyre lateral force / m, low-passed (seed 000 eq 14)
+                h = x[IVY] - lr * r + x[IK] * fy * vx
+                H = np.zeros((1, NX))
+                H[0, IVY] = 1.0
+                H[0, IBG] = lr
+                H[0, ISG] = lr * wz[k]
+                H[0, IVX] = x[IK] * fy
+                # K learns only in curves: a noisy regressor near zero would bias it towards
+                # zero (errors in variables); seed 000 also fits K on curves only.
+                if abs(fy) > k_curve:
+                    H[0, IK] = fy * vx
+                sig = slip_sigma + slip_rel * abs(x[IK] * fy * vx)
+                _update(x, P, H, np.array([0.0]), np.array([h]), np.array([[sig * sig]]), -1.0)
+        # ---- GNSS Doppler velocity at the antenna
+        if math.isfinite(ve[k]) and math.isfinite(vn[k]):
+            c, s = math.cos(x[IPSI]), math.sin(x[IPSI])
+            # antenna velocity = v + omega x lever (roll and pitch rates from the gyro)
+            vxa = x[IVX] - r * ly + wy[k] * lz
+            vya = x[IVY] + r * lx - wx[k] * lz
+            zhat = np.array([vxa * c - vya * s, vxa * s + vya * c])
+            H = np.zeros((2, NX))
+            H[0, IPSI] = -vxa * s - vya * c
+            H[0, IVX] = c
+            H[0, IVY] = -s
+            H[0, IBG] = ly * c + lx * s
+            H[0, ISG] = (ly * c + lx * s) * wz[k]
+            H[1, IPSI] = vxa * c - vya * s
+            H[1, IVX] = s
+            H[1, IVY] = c
+            H[1, IBG] = ly * s - lx * c
+            H[1, ISG] = (ly * s - lx * c) * wz[k]
+            R = np.eye(2) * vstd[k] ** 2
+            if _update(x, P, H, np.array([ve[k], vn[k]]), zhat, R, gate):
+                accepted += 1
+            else:
+                rejected += 1
+        # ---- GNSS position at the antenna
+        if math.isfinite(ge[k]) and math.isfinite(gn[k]):
+            c, s = math.cos(x[IPSI]), math.sin(x[IPSI])
+            zhat = np.array([x[IE] + lx * c - ly * s, x[IN] + lx * s + ly * c])
+            H = np.zeros((2, NX))
+            H[0, IE] = 1.0
+            H[1, IN] = 1.0
+            H[0, IPSI] = -lx * s - ly * c
+            H[1, IPSI] = lx * c - ly * s
+            R = np.eye(2) * pstd[k] ** 2
+            if _update(x, P, H, np.array([ge[k], gn[k]]), zhat, R, gate):
+                accepted += 1
+            else:
+                rejected += 1
+        xs[k] = x
+        Ps[k] = P
+    if smooth:
+        for k in range(n - 2, -1, -1):
+            xp, Pp, F = _predict(xs[k], Ps[k], t[k + 1] - t[k], wz[k], ax[k], ay[k], q, k_phi,
+                                 accel_sigma, gyro_sigma)
+            C = np.linalg.solve(Pp, F @ Ps[k]).T
+            xs[k] = xs[k] + C @ (xs[k + 1] - xp)
+            Ps[k] = Ps[k] + C @ (Ps[k + 1] - Pp) @ C.T
+    return xs, Ps, accepted, rejected
+
+
+@numba.njit(cache=True)
+def _low_pass(t, x, tau):  # type: ignore[no-untyped-def]
+    """Causal first-order low-pass with time constant ``tau`` (s)."""
+    y = np.empty_like(x)
+    y[0] = x[0]
+    for k in range(1, x.size):
+        a = min(1.0, (t[k] - t[k - 1]) / tau)
+        y[k] = y[k - 1] + a * (x[k] - y[k - 1])
+    return y
+
+
+def _initial_state(drive: Drive, vehicle: Vehicle, vw: NDArray) -> tuple[NDArray, NDArray, float]:
+    x0 = np.zeros(NX)
+    P0 = np.zeros((NX, NX))
+    rows, course, _ = gnss_course(drive, min_speed=3.0)
+    x0[IPSI] = course[0] if rows.size else 0.0
+    if "gnss_e" in drive:
+        ok = np.flatnonzero(np.isfinite(drive["gnss_e"]) & np.isfinite(drive["gnss_n"]))
+        if ok.size:
+            x0[IE], x0[IN] = drive["gnss_e"][ok[0]], drive["gnss_n"][ok[0]]
+    first_v = vw[np.isfinite(vw)]
+    x0[IVX] = float(first_v[0]) if first_v.size else 0.0
+    x0[ISW] = 1.0
+    k_prior = vehicle.slip_gain_k if not vehicle.missing(["mass", "lf", "lr", "cr"]) else 0.005
+    if not math.isfinite(k_prior) or k_prior <= 0:
+        k_prior = 0.005
+    x0[IK] = k_prior
+    sig = [10.0, 10.0, math.radians(10.0), 1.0, 0.5, 0.01, 0.5, 0.5, 0.02, 0.6 * k_prior, 0.02]
+    P0[np.arange(NX), np.arange(NX)] = np.square(sig)
+    return x0, P0, k_prior
+
+
+def _roll_gain(vehicle: Vehicle) -> float:
+    """k_phi = m h / (k - m g h), rad per m/s^2 (steady suspension roll), 0 if unknown."""
+    if vehicle.missing(["mass", "cg_height", "roll_axis_height", "roll_stiffness"]):
+        return 0.0
+    h = vehicle.cg_height - vehicle.roll_axis_height
+    denom = vehicle.roll_stiffness - vehicle.mass * G * h
+    return vehicle.mass * h / denom if denom > 0 else 0.0
+
+
+def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, noise: FusedNoise | None = None) -> Estimate:
+    """Run the fused EKF (and RTS smoother when ``smooth``); see module docstring."""
+    nz = noise or FusedNoise()
+    t = drive.t
+    n = len(drive)
+
+    def col(name: str, fill: float = 0.0) -> NDArray:
+        if name not in drive:
+            return np.full(n, fill)
+        v = drive[name].copy()
+        bad = ~np.isfinite(v)
+        if bad.any():  # hold the last IMU sample across gaps (an input, not a measurement)
+            idx = np.where(~bad, np.arange(n), 0)
+            np.maximum.accumulate(idx, out=idx)
+            v = np.where(bad, v[idx], v)
+            v[~np.isfinite(v)] = fill
+        return v
+
+    wz, ax, ay = col("wz"), col("ax"), col("ay")
+    wx, wy = col("wx"), col("wy")
+    raw = speed_raw(drive)
+    vw = np.full(n, np.nan) if raw is None else np.abs(raw)
+    ve = drive["gnss_ve"] if "gnss_ve" in drive else np.full(n, np.nan)
+    vn = drive["gnss_vn"] if "gnss_vn" in drive else np.full(n, np.nan)
+    ge = drive["gnss_e"] if "gnss_e" in drive else np.full(n, np.nan)
+    gn = drive["gnss_n"] if "gnss_n" in drive else np.full(n, np.nan)
+    vstd = drive["gnss_vel_std"] if "gnss_vel_std" in drive else np.full(n, nz.gnss_vel_sigma)
+    pstd = drive["gnss_pos_std"] if "gnss_pos_std" in drive else np.full(n, nz.gnss_pos_sigma)
+    vstd = np.where(np.isfinite(vstd) & (vstd > 0), np.maximum(vstd, 0.02), nz.gnss_vel_sigma)
+    pstd = np.where(np.isfinite(pstd) & (pstd > 0), np.maximum(pstd, 0.2), nz.gnss_pos_sigma)
+    x0, P0, k_prior = _initial_state(drive, vehicle, vw)
+    q = np.zeros(NX)
+    q[IBG] = nz.gyro_bias_psd**2
+    q[ICY] = nz.cy_psd**2
+    q[ICX] = nz.cx_psd**2
+    q[ISW] = nz.sw_psd**2
+    q[IK] = nz.k_psd**2
+    q[ISG] = nz.sg_psd**2
+    q[IE] = q[IN] = 1e-4
+    q[IPSI] = 0.0  # gyro noise is added inside the prediction
+    lever = np.array(vehicle.gnss_xyz, dtype=float)  # antenna from the CG, vehicle axes
+    lr = vehicle.lr
+    k_phi = _roll_gain(vehicle)
+    params = np.array([nz.wheel_sigma, nz.slip_sigma, nz.slip_rel, nz.gate_chi2,
+                       nz.standstill_speed, nz.accel_sigma, nz.gyro_sigma, nz.k_curve_accel])
+    fy_lp = _low_pass(t, ay * (1.0 - G * _roll_gain(vehicle)), nz.force_tau_s)
+    xs, Ps, acc, rej = _run(t, wz, wx, wy, ax, ay, fy_lp, vw, ve, vn, vstd, ge, gn, pstd, x0, P0, q, lever, lr,
+                            k_phi, params, smooth)
+    vx, vy = xs[:, IVX], xs[:, IVY]
+    speed2 = np.maximum(vx**2 + vy**2, 1e-6)
+    beta = np.arctan2(vy, np.maximum(np.abs(vx), 1e-3))
+    moving = np.abs(vx) > 0.5
+    beta = np.where(moving, beta, 0.0)
+    # beta = atan2(v_y, v_x): gradient [-v_y, v_x] / |v|^2
+    jx, jy = -vy / speed2, vx / speed2
+    var_b = jx**2 * Ps[:, IVX, IVX] + jy**2 * Ps[:, IVY, IVY] + 2 * jx * jy * Ps[:, IVX, IVY]
+    beta_std = np.where(moving, np.sqrt(np.maximum(var_b, 0.0)), math.radians(5.0))
+    beta_std = np.minimum(beta_std, math.radians(30.0))
+    r = (1.0 - xs[:, ISG]) * wz - xs[:, IBG]
+    sd = np.sqrt(np.maximum(np.diagonal(Ps, axis1=1, axis2=2), 0.0))
+    series = {
+        "beta": beta,
+        "beta_std": beta_std,
+        "r": r,
+        "yaw": xs[:, IPSI],
+        "yaw_std": sd[:, IPSI],
+        "e": xs[:, IE],
+        "n": xs[:, IN],
+        "e_std": sd[:, IE],
+        "n_std": sd[:, IN],
+        "vx": vx,
+        "vy": vy,
+        "gyro_bias": xs[:, IBG],
+    }
+    return Estimate(
+        "fused" if smooth else "fused_filter",
+        t,
+        series,
+        {
+            "slip_gain_k_s2pm": float(xs[-1, IK]) if not smooth else float(np.median(xs[:, IK])),
+            "slip_gain_k_sigma": float(sd[-1, IK]),
+            "slip_gain_k_prior": k_prior,
+            "wheel_speed_scale_factor": float(np.median(xs[:, ISW])),
+            "gyro_bias_final_radps": float(xs[-1, IBG]),
+            "gyro_scale_factor": float(np.median(xs[:, ISG])),
+            "roll_gain_rad_per_mps2": k_phi,
+            "gnss_updates_accepted": int(acc),
+            "gnss_updates_rejected": int(rej),
+            "smoothed": smooth,
+        },
+    )
+
+
+COLUMNS = ("wz", "ay", "ax", SPEED, "gnss_ve", "gnss_vn")
+PAPER = "this toolkit (fuses seeds 000, 001, 004 ideas)"
+
+
+@register(
+    "fused",
+    columns=COLUMNS,
+    vehicle_params=("lr",),
+    summary="EKF + RTS smoother: IMU, wheel speed, GNSS Doppler/position, on-line slip gain K",
+    paper=PAPER,
+)
+def fused(drive: Drive, vehicle: Vehicle) -> Estimate:
+    """Off-line best estimate: forward EKF and RTS smoother (see module docstring)."""
+    return fuse(drive, vehicle, smooth=True)
+
+
+@register(
+    "fused_filter",
+    columns=COLUMNS,
+    vehicle_params=("lr",),
+    summary="causal EKF of `fused` (real-time form)",
+    paper=PAPER,
+)
+def fused_filter(drive: Drive, vehicle: Vehicle) -> Estimate:
+    """Causal form of :func:`fused`: the forward EKF only."""
+    return fuse(drive, vehicle, smooth=False)
