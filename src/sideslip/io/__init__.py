@@ -1,0 +1,48 @@
+"""Adapters for outside recordings: ``sideslip convert FORMAT SRC --out DRIVE [--map MAP]``.
+
+The CLI calls :func:`convert` and then :func:`sideslip.drive.save_drive`; :data:`FORMATS` lists
+the formats for ``sideslip convert --help``.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from sideslip.drive import Drive
+from sideslip.errors import InputError
+from sideslip.vehicle import Vehicle, load_vehicle
+
+FORMATS: dict[str, str] = {
+    "comma2k19": "a comma2k19 segment folder (processed_log/ + global_pose/); IMU, CAN, u-blox "
+    "and the global pose as reference; --vehicle for the steering ratio (default rav4 for the "
+    "RAV4 dongle)",
+    "csv": "a CSV with its own column names and units, mapped by --map MAP.toml (optional raw "
+    "CAN frames decoded with a DBC)",
+    "mdf4": "an ASAM MDF4 file (.mf4), channels mapped by --map MAP.toml (optional raw CAN "
+    "frames decoded with a DBC)",
+}
+
+
+def convert(fmt: str, src: Path, vehicle: Vehicle | None, map_path: Path | None) -> Drive:
+    """Turn an outside recording into a validated drive; bad input raises InputError."""
+    if fmt not in FORMATS:
+        raise InputError(str(src), f"format {fmt!r} unknown: expected one of "
+                         + ", ".join(FORMATS))
+    if fmt == "comma2k19":
+        from sideslip.io.comma2k19 import convert_comma2k19, default_vehicle_name
+
+        if not Path(src).is_dir():
+            raise InputError(str(src), "expected a comma2k19 segment folder (processed_log/, "
+                             "global_pose/)")
+        if vehicle is None:
+            name = default_vehicle_name(src)
+            if name is None:
+                raise InputError(str(src), "the car of this segment has no preset: expected "
+                                 "--vehicle NAME_OR_TOML (steering ratio needed)")
+            vehicle = load_vehicle(name)
+        return convert_comma2k19(src, vehicle)
+    if map_path is None:
+        raise InputError(str(src), f"format {fmt!r} needs a channel map: expected --map MAP.toml")
+    from sideslip.io.mapping import convert_mapped
+
+    return convert_mapped(src, map_path, fmt)

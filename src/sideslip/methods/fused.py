@@ -7,15 +7,21 @@ the toolkit's best estimate).
 State (10): x = [e, n (CG position, ENU, m), psi (yaw, rad), v_x, v_y (CG velocity in the
 heading frame, m/s), b_g (gyro z bias, rad/s), c_y (lateral specific-force offset: g sin(bank)
 + accelerometer y bias, m/s^2), c_x (longitudinal offset: -g sin(pitch) + accelerometer x bias,
-m/s^2), s_w (wheel-speed scale factor, -), K (slip gain, s^2/m), s_g (gyro scale factor, -)].
+m/s^2), s_w (wheel-speed scale factor, -), K (slip gain, s^2/m), s_g (gyro scale factor, -),
+p_e, p_n (GNSS position error, Gauss-Markov, m)].
 
 Process model (kinematics of a rigid body in the plane, IMU as input):
     e' = v_x cos psi - v_y sin psi,    n' = v_x sin psi + v_y cos psi
-    psi' = r,                          r = (1 - s_g) w_z,m - b_g   (seed 001: the scale factor
-                                       is what breaks a kinematic filter through turns)
+    psi' = r,                          r = (w_z,m - b_g)(1 - s_g)   (seed 001: the scale factor
+                                       is what breaks a kinematic filter through turns; it
+                                       acts on the true rate, so a large raw bias does not
+                                       alias into it)
     v_x' = a_x,m - c_x + r v_y
     v_y' = a_y,m - c_y - g k_phi a_y,m - r v_x      (k_phi: suspension roll per lateral accel)
-    b_g', c_y', c_x', s_w', K' = white noise (random walks)
+    b_g', c_y', c_x', s_w', K', s_g' = white noise (random walks)
+    p_e' = -p_e / tau + w,  p_n' = -p_n / tau + w   (receiver position error is correlated over
+                                                      about a minute; white-noise updates at
+                                                      10 Hz would over-trust it)
 The suspension-roll term uses the sign convention of the package: the accelerometer reads
 a_y + g sin(roll) with roll = bank + roll_sus, roll_sus ~ k_phi a_y (seed 003 eq 43).
 
@@ -23,7 +29,7 @@ Measurements:
     wheel speed      v_w = s_w v_x                      (mean of rear wheels, else wheels/CAN)
     GNSS Doppler     [v_e, v_n] at the antenna = v + omega x l (roll/pitch rates from the
                      gyro: a roof antenna 1.3 m up sees roll rate x 1.3 m, as large as v_y)
-    GNSS position    [e, n] at the antenna               (innovation-gated against multipath)
+    GNSS position    [e, n] at the antenna + [p_e, p_n]  (innovation-gated against multipath)
     slip relation    0 = v_y - l_r r + K f_y v_x + noise (seed 000 eqs 5-14: rear-axle slip
                      beta_r = (v_y - l_r r)/v_x = -K f_y, with f_y = a_y,m (1 - g k_phi) the
                      tyre lateral force per mass: the accelerometer reading less the suspension
@@ -55,8 +61,8 @@ from sideslip.methods.registry import SPEED, register
 from sideslip.signals import gnss_course, speed_raw
 from sideslip.vehicle import G, Vehicle
 
-NX = 11
-IE, IN, IPSI, IVX, IVY, IBG, ICY, ICX, ISW, IK, ISG = range(NX)
+NX = 13
+IE, IN, IPSI, IVX, IVY, IBG, ICY, ICX, ISW, IK, ISG, IPE, IPN = range(NX)
 
 
 @dataclass(frozen=True)
@@ -64,8 +70,10 @@ class FusedNoise:
     """Noise settings (1-sigma), SI units; defaults for MEMS IMU, automotive wheel speeds and a
     u-blox M8-class receiver.  ``*_psd`` are continuous random-walk densities per sqrt(s)."""
 
-    accel_sigma: float = 0.15  # m/s^2, accelerometer noise + unmodelled vibration (per sample)
-    gyro_sigma: float = 0.005  # rad/s, gyro noise as a process-noise density per sqrt(s)
+    accel_vrw: float = 0.05  # m/s/sqrt(s): velocity random walk (accelerometer noise, vibration,
+    #                            unmodelled roll transients)
+    gyro_arw: float = 5e-4  # rad/sqrt(s): angle random walk (consumer MEMS: 1e-4 to 5e-4)
+    gyro_noise: float = 0.003  # rad/s per sample: for the standstill yaw-rate update
     gyro_bias_psd: float = 2e-5  # rad/s/sqrt(s)
     cy_psd: float = 0.03  # m/s^2/sqrt(s): bank changes along the road
     cx_psd: float = 0.05  # m/s^2/sqrt(s): grade changes
@@ -74,10 +82,12 @@ class FusedNoise:
     sg_psd: float = 1e-5  # 1/sqrt(s): gyro scale-factor drift
     wheel_sigma: float = 0.05  # m/s
     gnss_vel_sigma: float = 0.1  # m/s, used when the drive has no gnss_vel_std
-    gnss_pos_sigma: float = 2.0  # m, used when the drive has no gnss_pos_std
+    gnss_pos_sigma: float = 0.5  # m, white part, used when the drive has no gnss_pos_std
+    gnss_gm_sigma: float = 1.5  # m, correlated part of the GNSS position error (per axis)
+    gnss_gm_tau_s: float = 60.0  # s, its correlation time
     slip_sigma: float = 0.05  # m/s floor on the slip-relation residual (in v_y)
     slip_rel: float = 0.3  # relative error of the linear slip relation
-    gate_chi2: float = 16.0  # innovation gate (chi^2, per measurement block) for GNSS
+    gate_chi2: float = 16.0  # chi^2 beyond which a GNSS update is down-weighted (Huber)
     standstill_speed: float = 0.05  # m/s: wheels slower than this stand still
     force_tau_s: float = 0.15  # s: low-pass of the lateral force in the slip relation
     k_curve_accel: float = 1.0  # m/s^2: K is learned only where |f_y| exceeds this
@@ -85,24 +95,36 @@ class FusedNoise:
 
 @numba.njit(cache=True)
 def _update(x, P, H, z, zhat, R, gate):  # type: ignore[no-untyped-def]
-    """Joseph-form EKF update with a chi^2 gate; returns True when applied."""
+    """Joseph-form EKF update, robust to outliers; returns True when not down-weighted.
+
+    With ``gate`` > 0, an innovation whose squared Mahalanobis distance d2 exceeds ``gate``
+    has its noise inflated by d2 / gate (a Huber-type weight): a multipath jump of many sigma
+    barely moves the state, while a run of moderately surprising fixes (after a turn with a
+    wrong scale factor) still pulls the filter back instead of being thrown away.
+    """
     y = z - zhat
     S = H @ P @ H.T + R
     Sinv = np.linalg.inv(S)
     d2 = y @ Sinv @ y
+    ok = True
     if gate > 0.0 and d2 > gate:
-        return False
+        ok = False
+        R = R * (d2 / gate)
+        S = H @ P @ H.T + R
+        Sinv = np.linalg.inv(S)
     Kg = P @ H.T @ Sinv
     x += Kg @ y
     IKH = np.eye(x.size) - Kg @ H
     P[:, :] = IKH @ P @ IKH.T + Kg @ R @ Kg.T
-    return True
+    return ok
 
 
 @numba.njit(cache=True)
-def _predict(x, P, dt, wz, ax, ay, q, k_phi, accel_sigma, gyro_sigma):  # type: ignore[no-untyped-def]
+def _predict(x, P, dt, wz, ax, ay, q, k_phi, accel_vrw, gyro_arw, gm_tau):  # type: ignore[no-untyped-def]
     """One Euler step of the process model: returns (x_pred, P_pred, F)."""
-    r = (1.0 - x[ISG]) * wz - x[IBG]
+    r = (wz - x[IBG]) * (1.0 - x[ISG])
+    dr_db = -(1.0 - x[ISG])
+    dr_ds = -(wz - x[IBG])
     c, s = math.cos(x[IPSI]), math.sin(x[IPSI])
     vx, vy = x[IVX], x[IVY]
     F = np.eye(NX)
@@ -112,17 +134,21 @@ def _predict(x, P, dt, wz, ax, ay, q, k_phi, accel_sigma, gyro_sigma):  # type: 
     F[IN, IPSI] = dt * (vx * c - vy * s)
     F[IN, IVX] = dt * s
     F[IN, IVY] = dt * c
-    F[IPSI, IBG] = -dt
-    F[IPSI, ISG] = -dt * wz
+    F[IPSI, IBG] = dt * dr_db
+    F[IPSI, ISG] = dt * dr_ds
     F[IVX, IVY] = dt * r
-    F[IVX, IBG] = -dt * vy
-    F[IVX, ISG] = -dt * vy * wz
+    F[IVX, IBG] = dt * vy * dr_db
+    F[IVX, ISG] = dt * vy * dr_ds
     F[IVX, ICX] = -dt
     F[IVY, IVX] = -dt * r
-    F[IVY, IBG] = dt * vx
-    F[IVY, ISG] = dt * vx * wz
+    F[IVY, IBG] = -dt * vx * dr_db
+    F[IVY, ISG] = -dt * vx * dr_ds
     F[IVY, ICY] = -dt
+    F[IPE, IPE] = 1.0 - dt / gm_tau
+    F[IPN, IPN] = 1.0 - dt / gm_tau
     xn = x.copy()
+    xn[IPE] -= dt * x[IPE] / gm_tau
+    xn[IPN] -= dt * x[IPN] / gm_tau
     xn[IE] += dt * (vx * c - vy * s)
     xn[IN] += dt * (vx * s + vy * c)
     xn[IPSI] += dt * r
@@ -132,9 +158,9 @@ def _predict(x, P, dt, wz, ax, ay, q, k_phi, accel_sigma, gyro_sigma):  # type: 
     for i in range(NX):
         Pn[i, i] += q[i] * dt
     # gyro noise enters psi, v_x, v_y through r; accelerometer noise through v_x, v_y
-    Pn[IPSI, IPSI] += gyro_sigma**2 * dt
-    Pn[IVX, IVX] += (accel_sigma**2 + (vy * gyro_sigma) ** 2) * dt
-    Pn[IVY, IVY] += (accel_sigma**2 + (vx * gyro_sigma) ** 2) * dt
+    Pn[IPSI, IPSI] += gyro_arw**2 * dt
+    Pn[IVX, IVX] += (accel_vrw**2 + (vy * gyro_arw) ** 2) * dt
+    Pn[IVY, IVY] += (accel_vrw**2 + (vx * gyro_arw) ** 2) * dt
     return xn, Pn, F
 
 
@@ -155,25 +181,28 @@ def _run(  # type: ignore[no-untyped-def]
     x = x0.copy()
     P = P0.copy()
     wheel_sigma, slip_sigma, slip_rel, gate, still = noise[0], noise[1], noise[2], noise[3], noise[4]
-    accel_sigma, gyro_sigma, k_curve = noise[5], noise[6], noise[7]
+    accel_vrw, gyro_arw, k_curve = noise[5], noise[6], noise[7]
+    gyro_noise, gm_tau = noise[8], noise[9]
     accepted = 0
     rejected = 0
     lx, ly, lz = lever[0], lever[1], lever[2]
     for k in range(n):
         if k > 0:
             x, P, _ = _predict(x, P, t[k] - t[k - 1], wz[k - 1], ax[k - 1], ay[k - 1], q, k_phi,
-                               accel_sigma, gyro_sigma)
-        r = (1.0 - x[ISG]) * wz[k] - x[IBG]
+                               accel_vrw, gyro_arw, gm_tau)
+        r = (wz[k] - x[IBG]) * (1.0 - x[ISG])
+        dr_db = -(1.0 - x[ISG])
+        dr_ds = -(wz[k] - x[IBG])
         # ---- standstill: zero velocity and zero yaw rate
         if math.isfinite(vw[k]) and abs(vw[k]) < still:
             H = np.zeros((3, NX))
             H[0, IVX] = 1.0
             H[1, IVY] = 1.0
-            H[2, IBG] = -1.0
-            H[2, ISG] = -wz[k]
+            H[2, IBG] = dr_db
+            H[2, ISG] = dr_ds
             z = np.array([0.0, 0.0, 0.0])
             zhat = np.array([x[IVX], x[IVY], r])
-            R = np.diag(np.array([1e-4, 1e-4, gyro_sigma**2]))
+            R = np.diag(np.array([1e-4, 1e-4, gyro_noise**2]))
             _update(x, P, H, z, zhat, R, -1.0)
         elif math.isfinite(vw[k]):
             # ---- wheel speed
@@ -189,8 +218,8 @@ def _run(  # type: ignore[no-untyped-def]
                 h = x[IVY] - lr * r + x[IK] * fy * vx
                 H = np.zeros((1, NX))
                 H[0, IVY] = 1.0
-                H[0, IBG] = lr
-                H[0, ISG] = lr * wz[k]
+                H[0, IBG] = -lr * dr_db
+                H[0, ISG] = -lr * dr_ds
                 H[0, IVX] = x[IK] * fy
                 # K learns only in curves: a noisy regressor near zero would bias it towards
                 # zero (errors in variables); seed 000 also fits K on curves only.
@@ -209,13 +238,13 @@ def _run(  # type: ignore[no-untyped-def]
             H[0, IPSI] = -vxa * s - vya * c
             H[0, IVX] = c
             H[0, IVY] = -s
-            H[0, IBG] = ly * c + lx * s
-            H[0, ISG] = (ly * c + lx * s) * wz[k]
+            H[0, IBG] = -(ly * c + lx * s) * dr_db
+            H[0, ISG] = -(ly * c + lx * s) * dr_ds
             H[1, IPSI] = vxa * c - vya * s
             H[1, IVX] = s
             H[1, IVY] = c
-            H[1, IBG] = ly * s - lx * c
-            H[1, ISG] = (ly * s - lx * c) * wz[k]
+            H[1, IBG] = (lx * c - ly * s) * dr_db
+            H[1, ISG] = (lx * c - ly * s) * dr_ds
             R = np.eye(2) * vstd[k] ** 2
             if _update(x, P, H, np.array([ve[k], vn[k]]), zhat, R, gate):
                 accepted += 1
@@ -224,10 +253,12 @@ def _run(  # type: ignore[no-untyped-def]
         # ---- GNSS position at the antenna
         if math.isfinite(ge[k]) and math.isfinite(gn[k]):
             c, s = math.cos(x[IPSI]), math.sin(x[IPSI])
-            zhat = np.array([x[IE] + lx * c - ly * s, x[IN] + lx * s + ly * c])
+            zhat = np.array([x[IE] + lx * c - ly * s + x[IPE], x[IN] + lx * s + ly * c + x[IPN]])
             H = np.zeros((2, NX))
             H[0, IE] = 1.0
             H[1, IN] = 1.0
+            H[0, IPE] = 1.0
+            H[1, IPN] = 1.0
             H[0, IPSI] = -lx * s - ly * c
             H[1, IPSI] = lx * c - ly * s
             R = np.eye(2) * pstd[k] ** 2
@@ -240,7 +271,7 @@ def _run(  # type: ignore[no-untyped-def]
     if smooth:
         for k in range(n - 2, -1, -1):
             xp, Pp, F = _predict(xs[k], Ps[k], t[k + 1] - t[k], wz[k], ax[k], ay[k], q, k_phi,
-                                 accel_sigma, gyro_sigma)
+                                 accel_vrw, gyro_arw, gm_tau)
             C = np.linalg.solve(Pp, F @ Ps[k]).T
             xs[k] = xs[k] + C @ (xs[k + 1] - xp)
             Ps[k] = Ps[k] + C @ (Ps[k + 1] - Pp) @ C.T
@@ -274,7 +305,9 @@ def _initial_state(drive: Drive, vehicle: Vehicle, vw: NDArray) -> tuple[NDArray
     if not math.isfinite(k_prior) or k_prior <= 0:
         k_prior = 0.005
     x0[IK] = k_prior
-    sig = [10.0, 10.0, math.radians(10.0), 1.0, 0.5, 0.01, 0.5, 0.5, 0.02, 0.6 * k_prior, 0.02]
+    # gyro bias prior 0.1 rad/s (5.7 deg/s): raw phone gyros carry several deg/s (comma2k19: 3.9)
+    sig = [10.0, 10.0, math.radians(10.0), 1.0, 0.5, 0.1, 0.5, 0.5, 0.02, 0.6 * k_prior, 0.02,
+           1.5, 1.5]
     P0[np.arange(NX), np.arange(NX)] = np.square(sig)
     return x0, P0, k_prior
 
@@ -326,13 +359,15 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, noise: FusedNoise | None 
     q[ISW] = nz.sw_psd**2
     q[IK] = nz.k_psd**2
     q[ISG] = nz.sg_psd**2
+    q[IPE] = q[IPN] = 2.0 * nz.gnss_gm_sigma**2 / nz.gnss_gm_tau_s
     q[IE] = q[IN] = 1e-4
     q[IPSI] = 0.0  # gyro noise is added inside the prediction
     lever = np.array(vehicle.gnss_xyz, dtype=float)  # antenna from the CG, vehicle axes
     lr = vehicle.lr
     k_phi = _roll_gain(vehicle)
     params = np.array([nz.wheel_sigma, nz.slip_sigma, nz.slip_rel, nz.gate_chi2,
-                       nz.standstill_speed, nz.accel_sigma, nz.gyro_sigma, nz.k_curve_accel])
+                       nz.standstill_speed, nz.accel_vrw, nz.gyro_arw, nz.k_curve_accel,
+                       nz.gyro_noise, nz.gnss_gm_tau_s])
     fy_lp = _low_pass(t, ay * (1.0 - G * _roll_gain(vehicle)), nz.force_tau_s)
     xs, Ps, acc, rej = _run(t, wz, wx, wy, ax, ay, fy_lp, vw, ve, vn, vstd, ge, gn, pstd, x0, P0, q, lever, lr,
                             k_phi, params, smooth)
@@ -346,7 +381,7 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, noise: FusedNoise | None 
     var_b = jx**2 * Ps[:, IVX, IVX] + jy**2 * Ps[:, IVY, IVY] + 2 * jx * jy * Ps[:, IVX, IVY]
     beta_std = np.where(moving, np.sqrt(np.maximum(var_b, 0.0)), math.radians(5.0))
     beta_std = np.minimum(beta_std, math.radians(30.0))
-    r = (1.0 - xs[:, ISG]) * wz - xs[:, IBG]
+    r = (wz - xs[:, IBG]) * (1.0 - xs[:, ISG])
     sd = np.sqrt(np.maximum(np.diagonal(Ps, axis1=1, axis2=2), 0.0))
     series = {
         "beta": beta,
@@ -375,7 +410,7 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, noise: FusedNoise | None 
             "gyro_scale_factor": float(np.median(xs[:, ISG])),
             "roll_gain_rad_per_mps2": k_phi,
             "gnss_updates_accepted": int(acc),
-            "gnss_updates_rejected": int(rej),
+            "gnss_updates_downweighted": int(rej),
             "smoothed": smooth,
         },
     )
