@@ -12,7 +12,8 @@ p_e, p_n (GNSS position error, Gauss-Markov, m)].
 
 Process model (kinematics of a rigid body in the plane, IMU as input):
     e' = v_x cos psi - v_y sin psi,    n' = v_x sin psi + v_y cos psi
-    psi' = r,                          r = (w_z,m - b_g)(1 - s_g)   (seed 001: the scale factor
+    psi' = r = (w_z cos(roll) + w_y,m sin(roll)) / cos(pitch)     (Euler rates, seed 000 eq 3)
+                                       w_z = (w_z,m - b_g)(1 - s_g)   (seed 001: the scale factor
                                        is what breaks a kinematic filter through turns; it
                                        acts on the true rate, so a large raw bias does not
                                        alias into it)
@@ -38,6 +39,10 @@ Measurements:
                      file's m l_f / (L c_r) with a wide prior; the noise grows with
                      |K f_y v_x| (30 %) to carry tyre nonlinearity)
     standstill       v_x = 0, v_y = 0, r = 0 when the wheels stand (gyro bias observable)
+
+Roll and pitch come from the offsets: bank = asin(c_y/g), roll = bank + k_phi f_y, pitch =
+asin(-c_x/g).  They absorb the accelerometer biases (b_ay/g rad of roll per m/s^2), which cannot
+be told apart from a constant road crossfall without a second attitude reference.
 
 Everything is linearised about the current estimate (EKF), discretised by first-order Euler at
 the IMU rate, and stored for the RTS backward pass; memory is O(N) (10x10 per row).  Offline,
@@ -75,8 +80,8 @@ class FusedNoise:
     gyro_arw: float = 5e-4  # rad/sqrt(s): angle random walk (consumer MEMS: 1e-4 to 5e-4)
     gyro_noise: float = 0.003  # rad/s per sample: for the standstill yaw-rate update
     gyro_bias_psd: float = 2e-5  # rad/s/sqrt(s)
-    cy_psd: float = 0.03  # m/s^2/sqrt(s): bank changes along the road
-    cx_psd: float = 0.05  # m/s^2/sqrt(s): grade changes
+    cy_psd: float = 0.2  # m/s^2/sqrt(s): bank changes along the road (5 deg over 50 m at 20 m/s)
+    cx_psd: float = 0.1  # m/s^2/sqrt(s): grade changes
     sw_psd: float = 1e-5  # 1/sqrt(s): wheel-speed scale factor drift
     k_psd: float = 2e-6  # s^2/m/sqrt(s): slip gain drift
     sg_psd: float = 1e-5  # 1/sqrt(s): gyro scale-factor drift
@@ -120,11 +125,28 @@ def _update(x, P, H, z, zhat, R, gate):  # type: ignore[no-untyped-def]
 
 
 @numba.njit(cache=True)
-def _predict(x, P, dt, wz, ax, ay, q, k_phi, accel_vrw, gyro_arw, gm_tau):  # type: ignore[no-untyped-def]
+def _attitude(x, fy, k_phi):  # type: ignore[no-untyped-def]
+    """Body roll (bank from c_y plus suspension roll k_phi f_y) and pitch from c_x, rad."""
+    sb = min(max(x[ICY] / G, -0.6), 0.6)
+    sp = min(max(-x[ICX] / G, -0.6), 0.6)
+    return math.asin(sb) + k_phi * fy, math.asin(sp)
+
+
+@numba.njit(cache=True)
+def _yaw_rate(x, wz, wy, fy, k_phi):  # type: ignore[no-untyped-def]
+    """Heading rate psi' = (w_y sin(roll) + w_z cos(roll)) / cos(pitch) (seed 000 eq 3) with the
+    z gyro corrected for bias and scale factor; returns (psi', d/db_g, d/ds_g)."""
+    roll, pitch = _attitude(x, fy, k_phi)
+    cr, sr, cp = math.cos(roll), math.sin(roll), math.cos(pitch)
+    wz_true = (wz - x[IBG]) * (1.0 - x[ISG])
+    r = (wz_true * cr + wy * sr) / cp
+    return r, -(1.0 - x[ISG]) * cr / cp, -(wz - x[IBG]) * cr / cp
+
+
+@numba.njit(cache=True)
+def _predict(x, P, dt, wz, wy, fy, ax, ay, q, k_phi, accel_vrw, gyro_arw, gm_tau):  # type: ignore[no-untyped-def]
     """One Euler step of the process model: returns (x_pred, P_pred, F)."""
-    r = (wz - x[IBG]) * (1.0 - x[ISG])
-    dr_db = -(1.0 - x[ISG])
-    dr_ds = -(wz - x[IBG])
+    r, dr_db, dr_ds = _yaw_rate(x, wz, wy, fy, k_phi)
     c, s = math.cos(x[IPSI]), math.sin(x[IPSI])
     vx, vy = x[IVX], x[IVY]
     F = np.eye(NX)
@@ -188,11 +210,10 @@ def _run(  # type: ignore[no-untyped-def]
     lx, ly, lz = lever[0], lever[1], lever[2]
     for k in range(n):
         if k > 0:
-            x, P, _ = _predict(x, P, t[k] - t[k - 1], wz[k - 1], ax[k - 1], ay[k - 1], q, k_phi,
+            x, P, _ = _predict(x, P, t[k] - t[k - 1], wz[k - 1], wy[k - 1], fy_lp[k - 1], ax[k - 1],
+                               ay[k - 1], q, k_phi,
                                accel_vrw, gyro_arw, gm_tau)
-        r = (wz[k] - x[IBG]) * (1.0 - x[ISG])
-        dr_db = -(1.0 - x[ISG])
-        dr_ds = -(wz[k] - x[IBG])
+        r, dr_db, dr_ds = _yaw_rate(x, wz[k], wy[k], fy_lp[k], k_phi)
         # ---- standstill: zero velocity and zero yaw rate
         if math.isfinite(vw[k]) and abs(vw[k]) < still:
             H = np.zeros((3, NX))
@@ -270,7 +291,8 @@ def _run(  # type: ignore[no-untyped-def]
         Ps[k] = P
     if smooth:
         for k in range(n - 2, -1, -1):
-            xp, Pp, F = _predict(xs[k], Ps[k], t[k + 1] - t[k], wz[k], ax[k], ay[k], q, k_phi,
+            xp, Pp, F = _predict(xs[k], Ps[k], t[k + 1] - t[k], wz[k], wy[k], fy_lp[k], ax[k], ay[k],
+                                 q, k_phi,
                                  accel_vrw, gyro_arw, gm_tau)
             C = np.linalg.solve(Pp, F @ Ps[k]).T
             xs[k] = xs[k] + C @ (xs[k + 1] - xp)
@@ -381,7 +403,10 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, noise: FusedNoise | None 
     var_b = jx**2 * Ps[:, IVX, IVX] + jy**2 * Ps[:, IVY, IVY] + 2 * jx * jy * Ps[:, IVX, IVY]
     beta_std = np.where(moving, np.sqrt(np.maximum(var_b, 0.0)), math.radians(5.0))
     beta_std = np.minimum(beta_std, math.radians(30.0))
-    r = (wz - xs[:, IBG]) * (1.0 - xs[:, ISG])
+    bank = np.arcsin(np.clip(xs[:, ICY] / G, -0.6, 0.6))
+    roll = bank + k_phi * fy_lp
+    pitch = np.arcsin(np.clip(-xs[:, ICX] / G, -0.6, 0.6))
+    r = ((wz - xs[:, IBG]) * (1.0 - xs[:, ISG]) * np.cos(roll) + wy * np.sin(roll)) / np.cos(pitch)
     sd = np.sqrt(np.maximum(np.diagonal(Ps, axis1=1, axis2=2), 0.0))
     series = {
         "beta": beta,
@@ -396,6 +421,9 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, noise: FusedNoise | None 
         "vx": vx,
         "vy": vy,
         "gyro_bias": xs[:, IBG],
+        "roll": roll,
+        "bank": bank,
+        "pitch": pitch,
     }
     return Estimate(
         "fused" if smooth else "fused_filter",
