@@ -29,7 +29,8 @@ from sideslip.drive import Drive, load_drive, save_drive
 from sideslip.methods.registry import all_methods, run_method, why_not
 from sideslip.vehicle import load_vehicle
 
-BENCH_SCENARIO = "bench_endurance"
+BENCH_SCENARIO = "endurance"
+MAX_HOURS = 1.25  # the endurance route is about 110 km long
 RESULTS = Path("benchmarks") / "results"
 CACHE = Path("benchmarks") / "cache"
 
@@ -37,7 +38,10 @@ CACHE = Path("benchmarks") / "cache"
 def bench_drive(hours: float, console: Console | None = None) -> tuple[Drive, dict[str, float]]:
     """The cached benchmark drive of ``hours`` hours, and how long simulating/loading took."""
     import sideslip.simulate as sim
+    from sideslip.errors import InputError
 
+    if not 0.0 < hours <= MAX_HOURS:
+        raise InputError("--hours", f"{hours:g}: expected more than 0 and at most {MAX_HOURS:g} h")
     CACHE.mkdir(parents=True, exist_ok=True)
     path = CACHE / f"{BENCH_SCENARIO}_{hours:g}h.parquet"
     timings: dict[str, float] = {}

@@ -99,28 +99,65 @@ class FusedNoise:
 
 
 @numba.njit(cache=True)
-def _update(x, P, H, z, zhat, R, gate):  # type: ignore[no-untyped-def]
-    """Joseph-form EKF update, robust to outliers; returns True when not down-weighted.
+def _scalar_update(x, P, h, y, rvar, ph):  # type: ignore[no-untyped-def]
+    """Kalman update with one scalar measurement row ``h`` (innovation ``y``, variance
+    ``rvar``); ``ph`` is a work buffer.  Sequential scalar updates are exact for a diagonal R
+    and need no matrix inverse."""
+    n = x.size
+    for i in range(n):
+        acc = 0.0
+        for j in range(n):
+            acc += P[i, j] * h[j]
+        ph[i] = acc
+    s = rvar
+    for i in range(n):
+        s += h[i] * ph[i]
+    for i in range(n):
+        x[i] += ph[i] * (y / s)
+    for i in range(n):
+        gi = ph[i] / s
+        for j in range(n):
+            P[i, j] -= gi * ph[j]
 
-    With ``gate`` > 0, an innovation whose squared Mahalanobis distance d2 exceeds ``gate``
-    has its noise inflated by d2 / gate (a Huber-type weight): a multipath jump of many sigma
-    barely moves the state, while a run of moderately surprising fixes (after a turn with a
-    wrong scale factor) still pulls the filter back instead of being thrown away.
+
+@numba.njit(cache=True)
+def _block_update(x, P, h0, h1, y0, y1, rvar, gate, ph0, ph1, xb):  # type: ignore[no-untyped-def]
+    """Two-row update with R = rvar I, robust to outliers; returns True when not down-weighted.
+
+    The squared Mahalanobis distance d2 of the innovation is computed on the 2x2 block; beyond
+    ``gate`` the noise is inflated by d2 / gate (a Huber-type weight): a multipath jump of many
+    sigma barely moves the state, while a run of moderately surprising fixes (after a turn with
+    a wrong scale factor) still pulls the filter back instead of being thrown away.
     """
-    y = z - zhat
-    S = H @ P @ H.T + R
-    Sinv = np.linalg.inv(S)
-    d2 = y @ Sinv @ y
+    n = x.size
+    for i in range(n):
+        a = 0.0
+        b = 0.0
+        for j in range(n):
+            a += P[i, j] * h0[j]
+            b += P[i, j] * h1[j]
+        ph0[i] = a
+        ph1[i] = b
+    s00 = rvar
+    s01 = 0.0
+    s11 = rvar
+    for i in range(n):
+        s00 += h0[i] * ph0[i]
+        s01 += h0[i] * ph1[i]
+        s11 += h1[i] * ph1[i]
+    det = s00 * s11 - s01 * s01
+    d2 = (s11 * y0 * y0 - 2.0 * s01 * y0 * y1 + s00 * y1 * y1) / det
     ok = True
-    if gate > 0.0 and d2 > gate:
+    if d2 > gate:
+        rvar = rvar * d2 / gate
         ok = False
-        R = R * (d2 / gate)
-        S = H @ P @ H.T + R
-        Sinv = np.linalg.inv(S)
-    Kg = P @ H.T @ Sinv
-    x += Kg @ y
-    IKH = np.eye(x.size) - Kg @ H
-    P[:, :] = IKH @ P @ IKH.T + Kg @ R @ Kg.T
+    for i in range(n):
+        xb[i] = x[i]
+    _scalar_update(x, P, h0, y0, rvar, ph0)
+    dy = 0.0
+    for i in range(n):
+        dy += h1[i] * (x[i] - xb[i])
+    _scalar_update(x, P, h1, y1 - dy, rvar, ph0)
     return ok
 
 
@@ -143,13 +180,39 @@ def _yaw_rate(x, wz, wy, fy, k_phi):  # type: ignore[no-untyped-def]
     return r, -(1.0 - x[ISG]) * cr / cp, -(wz - x[IBG]) * cr / cp
 
 
+# Non-zero columns of each row of the transition Jacobian F (identity elsewhere).
+_F_ROWS = np.array(
+    [
+        [IE, IPSI, IVX, IVY, -1, -1],
+        [IN, IPSI, IVX, IVY, -1, -1],
+        [IPSI, IBG, ISG, -1, -1, -1],
+        [IVX, IVY, IBG, ISG, ICX, -1],
+        [IVY, IVX, IBG, ISG, ICY, -1],
+        [IBG, -1, -1, -1, -1, -1],
+        [ICY, -1, -1, -1, -1, -1],
+        [ICX, -1, -1, -1, -1, -1],
+        [ISW, -1, -1, -1, -1, -1],
+        [IK, -1, -1, -1, -1, -1],
+        [ISG, -1, -1, -1, -1, -1],
+        [IPE, -1, -1, -1, -1, -1],
+        [IPN, -1, -1, -1, -1, -1],
+    ],
+    dtype=np.int64,
+)
+
+
 @numba.njit(cache=True)
-def _predict(x, P, dt, wz, wy, fy, ax, ay, q, k_phi, accel_vrw, gyro_arw, gm_tau):  # type: ignore[no-untyped-def]
-    """One Euler step of the process model: returns (x_pred, P_pred, F)."""
+def _predict(x, P, xn, Pn, F, tmp, dt, wz, wy, fy, ax, ay, q, k_phi, accel_vrw, gyro_arw, gm_tau):  # type: ignore[no-untyped-def]
+    """One Euler step of the process model into ``xn``, ``Pn`` (and its Jacobian ``F``).
+
+    F P F' uses the sparsity of F (at most 5 non-zeros a row): O(NX^2), no allocation.
+    """
     r, dr_db, dr_ds = _yaw_rate(x, wz, wy, fy, k_phi)
     c, s = math.cos(x[IPSI]), math.sin(x[IPSI])
     vx, vy = x[IVX], x[IVY]
-    F = np.eye(NX)
+    F[:, :] = 0.0
+    for i in range(NX):
+        F[i, i] = 1.0
     F[IE, IPSI] = dt * (-vx * s - vy * c)
     F[IE, IVX] = dt * c
     F[IE, IVY] = -dt * s
@@ -168,7 +231,8 @@ def _predict(x, P, dt, wz, wy, fy, ax, ay, q, k_phi, accel_vrw, gyro_arw, gm_tau
     F[IVY, ICY] = -dt
     F[IPE, IPE] = 1.0 - dt / gm_tau
     F[IPN, IPN] = 1.0 - dt / gm_tau
-    xn = x.copy()
+    for i in range(NX):
+        xn[i] = x[i]
     xn[IPE] -= dt * x[IPE] / gm_tau
     xn[IPN] -= dt * x[IPN] / gm_tau
     xn[IE] += dt * (vx * c - vy * s)
@@ -176,14 +240,32 @@ def _predict(x, P, dt, wz, wy, fy, ax, ay, q, k_phi, accel_vrw, gyro_arw, gm_tau
     xn[IPSI] += dt * r
     xn[IVX] += dt * (ax - x[ICX] + r * vy)
     xn[IVY] += dt * (ay * (1.0 - G * k_phi) - x[ICY] - r * vx)
-    Pn = F @ P @ F.T
+    # tmp = F P
+    for i in range(NX):
+        for j in range(NX):
+            acc = 0.0
+            for m in range(6):
+                col = _F_ROWS[i, m]
+                if col < 0:
+                    break
+                acc += F[i, col] * P[col, j]
+            tmp[i, j] = acc
+    # Pn = tmp F'
+    for i in range(NX):
+        for j in range(NX):
+            acc = 0.0
+            for m in range(6):
+                col = _F_ROWS[j, m]
+                if col < 0:
+                    break
+                acc += tmp[i, col] * F[j, col]
+            Pn[i, j] = acc
     for i in range(NX):
         Pn[i, i] += q[i] * dt
     # gyro noise enters psi, v_x, v_y through r; accelerometer noise through v_x, v_y
     Pn[IPSI, IPSI] += gyro_arw**2 * dt
     Pn[IVX, IVX] += (accel_vrw**2 + (vy * gyro_arw) ** 2) * dt
     Pn[IVY, IVY] += (accel_vrw**2 + (vx * gyro_arw) ** 2) * dt
-    return xn, Pn, F
 
 
 @numba.njit(cache=True)
@@ -193,7 +275,7 @@ def _run(  # type: ignore[no-untyped-def]
 ):
     """Forward EKF over all rows, then (``smooth``) the RTS backward pass.
 
-    Only the filtered x and P are stored (O(N) memory, 10x10 per row); the backward pass
+    Only the filtered x and P are stored (O(N) memory, NX x NX per row); the backward pass
     recomputes each prediction and its Jacobian from the filtered state, which is exact
     because the prediction is a deterministic function of it.
     """
@@ -202,6 +284,15 @@ def _run(  # type: ignore[no-untyped-def]
     Ps = np.zeros((n, NX, NX))
     x = x0.copy()
     P = P0.copy()
+    xn = np.zeros(NX)
+    Pn = np.zeros((NX, NX))
+    F = np.zeros((NX, NX))
+    tmp = np.zeros((NX, NX))
+    h0 = np.zeros(NX)
+    h1 = np.zeros(NX)
+    ph0 = np.zeros(NX)
+    ph1 = np.zeros(NX)
+    xb = np.zeros(NX)
     wheel_sigma, slip_sigma, slip_rel, gate, still = noise[0], noise[1], noise[2], noise[3], noise[4]
     accel_vrw, gyro_arw, k_curve = noise[5], noise[6], noise[7]
     gyro_noise, gm_tau = noise[8], noise[9]
@@ -210,94 +301,175 @@ def _run(  # type: ignore[no-untyped-def]
     lx, ly, lz = lever[0], lever[1], lever[2]
     for k in range(n):
         if k > 0:
-            x, P, _ = _predict(x, P, t[k] - t[k - 1], wz[k - 1], wy[k - 1], fy_lp[k - 1], ax[k - 1],
-                               ay[k - 1], q, k_phi,
-                               accel_vrw, gyro_arw, gm_tau)
+            _predict(x, P, xn, Pn, F, tmp, t[k] - t[k - 1], wz[k - 1], wy[k - 1], fy_lp[k - 1],
+                     ax[k - 1], ay[k - 1], q, k_phi, accel_vrw, gyro_arw, gm_tau)
+            x[:] = xn
+            P[:, :] = Pn
         r, dr_db, dr_ds = _yaw_rate(x, wz[k], wy[k], fy_lp[k], k_phi)
-        # ---- standstill: zero velocity and zero yaw rate
         if math.isfinite(vw[k]) and abs(vw[k]) < still:
-            H = np.zeros((3, NX))
-            H[0, IVX] = 1.0
-            H[1, IVY] = 1.0
-            H[2, IBG] = dr_db
-            H[2, ISG] = dr_ds
-            z = np.array([0.0, 0.0, 0.0])
-            zhat = np.array([x[IVX], x[IVY], r])
-            R = np.diag(np.array([1e-4, 1e-4, gyro_noise**2]))
-            _update(x, P, H, z, zhat, R, -1.0)
+            # ---- standstill: zero velocity and zero yaw rate
+            h0[:] = 0.0
+            h0[IVX] = 1.0
+            _scalar_update(x, P, h0, -x[IVX], 1e-4, ph0)
+            h0[:] = 0.0
+            h0[IVY] = 1.0
+            _scalar_update(x, P, h0, -x[IVY], 1e-4, ph0)
+            r, dr_db, dr_ds = _yaw_rate(x, wz[k], wy[k], fy_lp[k], k_phi)
+            h0[:] = 0.0
+            h0[IBG] = dr_db
+            h0[ISG] = dr_ds
+            _scalar_update(x, P, h0, -r, gyro_noise**2, ph0)
         elif math.isfinite(vw[k]):
             # ---- wheel speed
-            H = np.zeros((1, NX))
-            H[0, IVX] = x[ISW]
-            H[0, ISW] = x[IVX]
-            _update(x, P, H, np.array([vw[k]]), np.array([x[ISW] * x[IVX]]),
-                    np.array([[wheel_sigma**2]]), -1.0)
+            h0[:] = 0.0
+            h0[IVX] = x[ISW]
+            h0[ISW] = x[IVX]
+            _scalar_update(x, P, h0, vw[k] - x[ISW] * x[IVX], wheel_sigma**2, ph0)
             # ---- slip relation (linear rear tyre), at the wheel-speed rate
             vx = x[IVX]
             if vx > 1.0:
+                r, dr_db, dr_ds = _yaw_rate(x, wz[k], wy[k], fy_lp[k], k_phi)
                 fy = fy_lp[k]  # tyre lateral force / m, low-passed (seed 000 eq 14)
-                h = x[IVY] - lr * r + x[IK] * fy * vx
-                H = np.zeros((1, NX))
-                H[0, IVY] = 1.0
-                H[0, IBG] = -lr * dr_db
-                H[0, ISG] = -lr * dr_ds
-                H[0, IVX] = x[IK] * fy
+                hval = x[IVY] - lr * r + x[IK] * fy * vx
+                h0[:] = 0.0
+                h0[IVY] = 1.0
+                h0[IBG] = -lr * dr_db
+                h0[ISG] = -lr * dr_ds
+                h0[IVX] = x[IK] * fy
                 # K learns only in curves: a noisy regressor near zero would bias it towards
                 # zero (errors in variables); seed 000 also fits K on curves only.
                 if abs(fy) > k_curve:
-                    H[0, IK] = fy * vx
+                    h0[IK] = fy * vx
                 sig = slip_sigma + slip_rel * abs(x[IK] * fy * vx)
-                _update(x, P, H, np.array([0.0]), np.array([h]), np.array([[sig * sig]]), -1.0)
+                _scalar_update(x, P, h0, -hval, sig * sig, ph0)
         # ---- GNSS Doppler velocity at the antenna
         if math.isfinite(ve[k]) and math.isfinite(vn[k]):
+            r, dr_db, dr_ds = _yaw_rate(x, wz[k], wy[k], fy_lp[k], k_phi)
             c, s = math.cos(x[IPSI]), math.sin(x[IPSI])
             # antenna velocity = v + omega x lever (roll and pitch rates from the gyro)
             vxa = x[IVX] - r * ly + wy[k] * lz
             vya = x[IVY] + r * lx - wx[k] * lz
-            zhat = np.array([vxa * c - vya * s, vxa * s + vya * c])
-            H = np.zeros((2, NX))
-            H[0, IPSI] = -vxa * s - vya * c
-            H[0, IVX] = c
-            H[0, IVY] = -s
-            H[0, IBG] = -(ly * c + lx * s) * dr_db
-            H[0, ISG] = -(ly * c + lx * s) * dr_ds
-            H[1, IPSI] = vxa * c - vya * s
-            H[1, IVX] = s
-            H[1, IVY] = c
-            H[1, IBG] = (lx * c - ly * s) * dr_db
-            H[1, ISG] = (lx * c - ly * s) * dr_ds
-            R = np.eye(2) * vstd[k] ** 2
-            if _update(x, P, H, np.array([ve[k], vn[k]]), zhat, R, gate):
+            h0[:] = 0.0
+            h1[:] = 0.0
+            h0[IPSI] = -vxa * s - vya * c
+            h0[IVX] = c
+            h0[IVY] = -s
+            h0[IBG] = -(ly * c + lx * s) * dr_db
+            h0[ISG] = -(ly * c + lx * s) * dr_ds
+            h1[IPSI] = vxa * c - vya * s
+            h1[IVX] = s
+            h1[IVY] = c
+            h1[IBG] = (lx * c - ly * s) * dr_db
+            h1[ISG] = (lx * c - ly * s) * dr_ds
+            y0 = ve[k] - (vxa * c - vya * s)
+            y1 = vn[k] - (vxa * s + vya * c)
+            if _block_update(x, P, h0, h1, y0, y1, vstd[k] ** 2, gate, ph0, ph1, xb):
                 accepted += 1
             else:
                 rejected += 1
         # ---- GNSS position at the antenna
         if math.isfinite(ge[k]) and math.isfinite(gn[k]):
             c, s = math.cos(x[IPSI]), math.sin(x[IPSI])
-            zhat = np.array([x[IE] + lx * c - ly * s + x[IPE], x[IN] + lx * s + ly * c + x[IPN]])
-            H = np.zeros((2, NX))
-            H[0, IE] = 1.0
-            H[1, IN] = 1.0
-            H[0, IPE] = 1.0
-            H[1, IPN] = 1.0
-            H[0, IPSI] = -lx * s - ly * c
-            H[1, IPSI] = lx * c - ly * s
-            R = np.eye(2) * pstd[k] ** 2
-            if _update(x, P, H, np.array([ge[k], gn[k]]), zhat, R, gate):
+            h0[:] = 0.0
+            h1[:] = 0.0
+            h0[IE] = 1.0
+            h1[IN] = 1.0
+            h0[IPE] = 1.0
+            h1[IPN] = 1.0
+            h0[IPSI] = -lx * s - ly * c
+            h1[IPSI] = lx * c - ly * s
+            y0 = ge[k] - (x[IE] + lx * c - ly * s + x[IPE])
+            y1 = gn[k] - (x[IN] + lx * s + ly * c + x[IPN])
+            if _block_update(x, P, h0, h1, y0, y1, pstd[k] ** 2, gate, ph0, ph1, xb):
                 accepted += 1
             else:
                 rejected += 1
+        for i in range(NX):
+            for j in range(i + 1, NX):  # keep P symmetric against round-off
+                v = 0.5 * (P[i, j] + P[j, i])
+                P[i, j] = v
+                P[j, i] = v
         xs[k] = x
         Ps[k] = P
     if smooth:
+        L = np.zeros((NX, NX))
+        B = np.zeros((NX, NX))
+        D = np.zeros((NX, NX))
+        dx = np.zeros(NX)
         for k in range(n - 2, -1, -1):
-            xp, Pp, F = _predict(xs[k], Ps[k], t[k + 1] - t[k], wz[k], wy[k], fy_lp[k], ax[k], ay[k],
-                                 q, k_phi,
-                                 accel_vrw, gyro_arw, gm_tau)
-            C = np.linalg.solve(Pp, F @ Ps[k]).T
-            xs[k] = xs[k] + C @ (xs[k + 1] - xp)
-            Ps[k] = Ps[k] + C @ (Ps[k + 1] - Pp) @ C.T
+            _predict(xs[k], Ps[k], xn, Pn, F, tmp, t[k + 1] - t[k], wz[k], wy[k], fy_lp[k], ax[k],
+                     ay[k], q, k_phi, accel_vrw, gyro_arw, gm_tau)
+            # smoother gain C = P_k F' Pn^{-1}: solve Pn C' = F P_k by Cholesky (Pn is SPD)
+            _cholesky(Pn, L)
+            for i in range(NX):  # B = F P_k (sparse rows of F)
+                for j in range(NX):
+                    acc = 0.0
+                    for m in range(6):
+                        col = _F_ROWS[i, m]
+                        if col < 0:
+                            break
+                        acc += F[i, col] * Ps[k, col, j]
+                    B[i, j] = acc
+            _cho_solve(L, B)  # B <- C'
+            for i in range(NX):
+                dx[i] = xs[k + 1, i] - xn[i]
+            for i in range(NX):
+                acc = 0.0
+                for j in range(NX):
+                    acc += B[j, i] * dx[j]
+                xs[k, i] += acc
+            for i in range(NX):  # D = (P_{k+1} - Pn)
+                for j in range(NX):
+                    D[i, j] = Ps[k + 1, i, j] - Pn[i, j]
+            for i in range(NX):  # tmp = C D
+                for j in range(NX):
+                    acc = 0.0
+                    for m in range(NX):
+                        acc += B[m, i] * D[m, j]
+                    tmp[i, j] = acc
+            for i in range(NX):  # P_k += tmp C'
+                for j in range(i, NX):
+                    acc = 0.0
+                    for m in range(NX):
+                        acc += tmp[i, m] * B[m, j]
+                    Ps[k, i, j] += acc
+                    if j != i:
+                        Ps[k, j, i] = Ps[k, i, j]
     return xs, Ps, accepted, rejected
+
+
+@numba.njit(cache=True)
+def _cholesky(A, L):  # type: ignore[no-untyped-def]
+    """Lower Cholesky factor of the SPD matrix A into L (jitter-guarded)."""
+    n = A.shape[0]
+    L[:, :] = 0.0
+    for j in range(n):
+        s = A[j, j]
+        for m in range(j):
+            s -= L[j, m] * L[j, m]
+        L[j, j] = math.sqrt(max(s, 1e-300))
+        for i in range(j + 1, n):
+            s = A[i, j]
+            for m in range(j):
+                s -= L[i, m] * L[j, m]
+            L[i, j] = s / L[j, j]
+
+
+@numba.njit(cache=True)
+def _cho_solve(L, B):  # type: ignore[no-untyped-def]
+    """Solve (L L') X = B in place of B (all columns)."""
+    n = L.shape[0]
+    for c in range(B.shape[1]):
+        for i in range(n):
+            s = B[i, c]
+            for m in range(i):
+                s -= L[i, m] * B[m, c]
+            B[i, c] = s / L[i, i]
+        for i in range(n - 1, -1, -1):
+            s = B[i, c]
+            for m in range(i + 1, n):
+                s -= L[m, i] * B[m, c]
+            B[i, c] = s / L[i, i]
 
 
 @numba.njit(cache=True)

@@ -128,6 +128,7 @@ def simulate(
     seed: int = 0,
     vehicle: Vehicle | None = None,
     config: SensorConfig | None = None,
+    duration_s: float | None = None,
 ) -> Drive:
     """Simulate a scenario and return a validated 100 Hz drive with reference columns.
 
@@ -138,6 +139,7 @@ def simulate(
               ``cr_`` scenarios, whose car is CommonRoad's parameter set
     config    sensor grades (default: ``SensorConfig()`` with the scenario's
               ``sensor_overrides``); when given it is used as is
+    duration_s  optional length of the drive, s (default: the scenario's); not for ``cr_``
 
     ``drive.meta``: ``scenario``, ``seed``, ``vehicle`` (preset name, or the vehicle's source
     when it is not an unmodified preset), ``vehicle_params``, ``source``, ``truth_sensor``
@@ -161,6 +163,8 @@ def simulate(
     from sideslip.simulate import scenarios
 
     car = vehicle if vehicle is not None else load_vehicle(spec.vehicle)
-    truth = scenarios.run_scenario(scenario, seed=int(seed), vehicle=car, dt=DT)
+    if duration_s is not None and not 1.0 <= float(duration_s) <= 6.0 * 3600.0:
+        raise InputError(f"scenario '{scenario}'", f"duration {duration_s!r} s: expected 1 to 21600 s")
+    truth = scenarios.run_scenario(scenario, seed=int(seed), vehicle=car, dt=DT, duration_s=duration_s)
     ref = spec.vehicle if vehicle is None else _vehicle_ref(vehicle)
     return drive_from_truth(truth, car, int(seed), cfg, scenario, ref)

@@ -479,6 +479,48 @@ def _urban_outages() -> tuple[tuple[float, float], ...]:
     return ((95.0, 99.0), (260.0, 266.0), (410.0, 413.0), (560.0, 567.0))
 
 
+# ---- endurance: an hour of mixed driving for `sideslip bench` -----------------------------------
+ENDURANCE_LENGTH_M = 110_000.0  # enough road for 1.5 h at the route's average speed
+
+
+def _endurance_blocks(rng: np.random.Generator) -> list[tuple[float, float, float, float, float, float, float]]:
+    """Random blocks (as in _URBAN) until the route is long enough: town, country, highway."""
+    blocks = []
+    total = 0.0
+    while total < ENDURANCE_LENGTH_M:
+        kind = rng.choice(3, p=(0.3, 0.4, 0.3))
+        if kind == 0:  # town: short blocks, 90 deg corners, stops
+            length, v, radius = rng.uniform(150, 450), rng.choice((40.0, 50.0)), rng.uniform(12, 25)
+            angle = float(rng.choice((-90.0, 90.0)))
+            dwell = float(rng.choice((0.0, 0.0, 15.0)))
+        elif kind == 1:  # country road: sweeping curves
+            length, v, radius = rng.uniform(300, 1500), rng.choice((70.0, 80.0, 90.0)), rng.uniform(150, 500)
+            angle, dwell = float(rng.uniform(-90, 90)), 0.0
+        else:  # highway
+            length, v, radius = rng.uniform(1000, 4000), 100.0, rng.uniform(600, 1500)
+            angle, dwell = float(rng.uniform(-40, 40)), 0.0
+        cross = float(rng.uniform(-3.0, 3.0))
+        grade = float(rng.uniform(-4.0, 4.0))
+        blocks.append((float(length), float(v), cross, grade, dwell, angle, float(radius)))
+        total += length + abs(angle) / 180.0 * np.pi * radius
+    return blocks
+
+
+def _build_endurance(rng: np.random.Generator, vehicle: Vehicle) -> tuple[Road, Plan]:
+    pieces, speed, bank, grade, stops = _route(_endurance_blocks(rng), 30.0)
+    road = road_from_pieces(
+        straight(5.0) + pieces + straight(200.0),
+        bank_deg=[(s + 5.0, b) for s, b in bank],
+        grade_pct=[(s + 5.0, g) for s, g in grade],
+        mu=((0.0, 0.9),),
+    )
+    road = with_roughness(road, rng, 0.15, 0.2)
+    v_set = _knots(road.s, [(s + 5.0, v) for s, v in speed])
+    stops = [(0.5, 4.0)] + [(s + 5.0, d) for s, d in stops]
+    v = speed_profile(road, v_set, 2.5, 1.5, 2.5, stops=stops)
+    return road, PathPlan(v_profile=v, stops=tuple(stops), a_acc=1.8, a_dec=2.5)
+
+
 # ---- the registry --------------------------------------------------------------------------------
 _SUB_DURATION, _SUB_OUTAGES = _suburban_schedule()
 _DEMO_DURATION, _DEMO_OUTAGES = _demo_schedule()
@@ -571,6 +613,13 @@ SCENARIOS: dict[str, Scenario] = {
             MappingProxyType({"gnss_outages": _DEMO_OUTAGES}), _build_demo, _FWD,
             MappingProxyType({"speed_kmh": 80.0, "bank_deg": (1.0, 4.0)}),
         ),
+        Scenario(
+            "endurance",
+            "an hour of town, country road and highway with stops (the speed benchmark's drive)",
+            "midsize_sedan", "sideslip bench", 3600.0,
+            MappingProxyType({"gnss_multipath_prob": 0.005}), _build_endurance, _FWD,
+            MappingProxyType({"duration_h": 1.0}),
+        ),
     )
 }  # fmt: skip
 
@@ -589,7 +638,11 @@ def build_scenario(
 
 
 def run_scenario_full(
-    name: str, seed: int = 0, vehicle: Vehicle | None = None, dt: float = 0.01
+    name: str,
+    seed: int = 0,
+    vehicle: Vehicle | None = None,
+    dt: float = 0.01,
+    duration_s: float | None = None,
 ) -> tuple[Truth, Diagnostics]:
     """Truth and model internals of scenario ``name`` (see :func:`run_scenario`)."""
     if name not in SCENARIOS:
@@ -597,12 +650,20 @@ def run_scenario_full(
     scenario = SCENARIOS[name]
     vehicle = vehicle if vehicle is not None else load_vehicle(scenario.vehicle)
     road, plan, rng = build_scenario(name, seed, vehicle)
-    return simulate_truth_full(vehicle, road, plan, scenario.duration_s, dt, rng, scenario.options)
+    duration = scenario.duration_s if duration_s is None else float(duration_s)
+    return simulate_truth_full(vehicle, road, plan, duration, dt, rng, scenario.options)
 
 
-def run_scenario(name: str, seed: int = 0, vehicle: Vehicle | None = None, dt: float = 0.01) -> Truth:
+def run_scenario(
+    name: str,
+    seed: int = 0,
+    vehicle: Vehicle | None = None,
+    dt: float = 0.01,
+    duration_s: float | None = None,
+) -> Truth:
     """Truth of scenario ``name`` on the uniform grid 0, dt, ..., duration; deterministic per seed.
 
-    ``vehicle`` defaults to the scenario's preset.  Integration is RK4 at <= 2.5 ms internally.
+    ``vehicle`` defaults to the scenario's preset; ``duration_s`` shortens (or, where the road
+    is long enough, lengthens) the scenario.  Integration is RK4 at <= 2.5 ms internally.
     """
-    return run_scenario_full(name, seed, vehicle, dt)[0]
+    return run_scenario_full(name, seed, vehicle, dt, duration_s)[0]

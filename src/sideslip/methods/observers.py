@@ -1,0 +1,389 @@
+"""Sideslip observers of seed 003 (IEEE Access 2020, Sec. II): bicycle, kinematic, modified.
+
+Four registered methods, all causal, all at the IMU rate (the drive's rows):
+
+``obs_bicycle`` -- simple bicycle-model Luenberger observer (eqs 10-17)
+    state x = [beta (rad), r (rad/s)], input u = delta (front road-wheel angle, rad), output
+    y = r (gyro ``wz``, rad/s).  x' = A(v) x + B(v) u + K_b (y - C x), C = [0, 1]; gains by
+    pole placement with both poles at ``P_BICYCLE`` at every speed
+    (:func:`sideslip.filters.pole_placement.single_output_gain`; eqs 16-17 are garbled in the
+    paper, so re-derived).  Reads no accelerometer: immune to roll/bank in a_y, but exposed to
+    model error (cornering stiffness, road friction) and to the road bank's side force.
+    beta is seen through r only via a21 = (cr lr - cf lf)/I_z: for a (near) neutral-steer car
+    the double pole moves from ``P_BICYCLE`` towards the model's own sideslip pole
+    a11 = -(cf + cr)/(m v_x) (:func:`~sideslip.filters.pole_placement.reachable_pole`), so the
+    gains stay bounded; the full placement applies when |cf lf - cr lr| is at least
+    ``COUPLING_FRACTION`` of cf lf + cr lr.
+
+``obs_kinematic`` -- kinematic observer (eqs 18-30)
+    state x = [v_x, v_y] (m/s), inputs u = [a_x, a_y] (m/s^2, a_y compensated for roll as the
+    paper assumes, by the roll index), output y = v_x from the undriven (rear) wheel speeds,
+    else all wheels, else ``v_can``.  v_x' = r v_y + a_x, v_y' = -r v_x + a_y; frozen-time
+    gains K1 = 2 alpha |r|, K2 = (alpha^2 - 1) r put the poles at -alpha |r| (eq 23).
+    Between wheel samples the state is propagated exactly (a rotation by r dt plus the
+    integrated input); at a fresh wheel sample the correction K (y - v_x) is applied over the
+    time since the previous sample.  beta = atan2(v_y, v_x).
+    r -> 0: with r = 0 the lateral velocity is unobservable (the output matrix loses rank and
+    K2 = 0), and v_x would go uncorrected.  Two documented changes: K1 uses
+    max(|r|, ``R_OBSERVABLE``) so v_x keeps tracking the wheels (poles stay in the left half
+    plane: s^2 + K1 s + alpha^2 r^2), and v_y is pulled towards 0 with time constant
+    ``TAU_STRAIGHT`` scaled by max(0, 1 - |r|/R_OBSERVABLE) -- straight driving has beta ~ 0 --
+    which bounds the drift of an uncorrected accelerometer bias when nothing corrects it.
+    Sensitivity (steady state of eqs 21-22 in a constant turn, derived here): accelerometer
+    biases b_x, b_y and a wheel-speed error s leave v_y off by
+    b_x/r - (2/alpha) b_y/|r| + (2/alpha) sign(r) s, which is why the paper calls the
+    kinematic model "not robust to the sensor error".  ``ALPHA`` = 2 (the paper gives no
+    value): larger alpha shrinks the b_y and s terms but not b_x/r, and K2 = (alpha^2 - 1) r
+    then amplifies the wheel-speed noise.
+
+``obs_modified`` -- the paper's modified bicycle observer (eqs 31-39), with compensation
+    state x = [beta, r], input delta, outputs y = [r, a_y] with the gravity-free a_y =
+    a_ym - g sin(roll) (eq 62 restated in our sign: the paper writes a_ym + g sin(Phi) with
+    its Phi = minus our roll), roll from the ``roll_index`` estimator (eq 61).
+    a_y = v_x (beta' + r) = C2 x + D2 delta with C2 = [-(cf+cr)/m, (cr lr - cf lf)/(m v_x)],
+    D2 = cf/m (per-axle stiffness; eq 32).  K12 = 1/v_x makes the beta error obey
+    beta~' = -(1 + K11) r~ (eq 36); the other gains put both poles at ``P_MODIFIED``
+    (:func:`sideslip.filters.pole_placement.two_output_gain`, K22 = a22/c22 as in eq 37).
+    Road bank, re-derived: eq 32 is the tyre force over m, while the gravity-free a_y on a
+    road banked by ``phi_b`` is tyre force / m - g sin(phi_b) (the bank term the paper keeps
+    in its own eq 47).  So the estimated bank (roll index roll minus eq-41 suspension roll)
+    enters as a known input u = [delta, sin(phi_b)] with B = [..., -g/v_x] and
+    D = [..., -g] (:func:`sideslip.models.single_track.continuous_arrays`).  With
+    K12 = 1/v_x the bank drops out of the beta row (beta' = a_y/v_x - r + ...), as eq 38;
+    it corrects the yaw-rate row, which otherwise reads the bank's gravity as tyre force and
+    feeds that error back into beta through (1 + K11).  On a level road it changes nothing.
+``obs_modified_nocomp`` -- the same fed with the uncompensated a_ym and no bank (the paper's
+    mod-bic-w/g): the flat-road model of eqs 31-39 as printed.
+
+Pole choice (the paper gives no value): -20 rad/s for both bicycle observers.  The
+single-track model's own poles lie at about -8 to -15 rad/s at road speeds (seed 003's car at
+80 km/h: -11 +- 2i); an observer no faster than its plant is nearly an open-loop model and
+inherits all of the model's error, so the poles are set at about twice the plant's speed
+(time constant 50 ms, still far inside the 100 Hz IMU's bandwidth).
+
+Outputs: ``beta`` (rad, CG), ``r`` (rad/s: the observer's r_hat for ``obs_bicycle``; the zeroed
+gyro for the modified observers, whose r_hat absorbs the mismatch between a_y and the model by
+design -- eq 36 frees the beta error from the model precisely by letting r~ carry it -- and is
+no yaw-rate estimate), ``gyro_bias`` (the standstill zeroing), and for the observers that run
+the roll index ``roll`` and ``bank``; ``vx``, ``vy`` for ``obs_kinematic``.
+
+Discretisation: the closed-loop matrix A - K C has the double eigenvalue p by construction, so
+each step is exact (e^{p dt}(I + N dt), :func:`~sideslip.filters.pole_placement.double_pole_step`)
+with the input and measurement held over the step.  Rows without a fresh gyro (or, for the
+modified observer, accelerometer) sample propagate the model open-loop (RK4, sub-stepped).
+
+Low speed, standstill, reversing: the model matrices use max(|v_x|, ``V_GATE``).  Below
+``V_GATE`` (or reversing) the observers are not run: the state is set to the kinematic
+(no-slip) bicycle value beta = atan2(v_x l_r tan(delta)/L, v_x) (about pi when reversing,
+following beta = atan2(v_y, v_x)), r = measured, and the observer restarts from there when the
+speed rises again.  The state is clipped to |beta| <= 1.2 rad, |r| <= 5 rad/s; every output is
+finite on every row.  The gyro is zeroed at standstill (see
+:func:`sideslip.methods.roll_index.standstill_gyro_bias`); the accelerometer is assumed zeroed
+(the paper's assumption) and the IMU at the CG (lever arms are ignored).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+from numpy.typing import NDArray
+
+from sideslip.drive import Drive
+from sideslip.estimate import Estimate
+from sideslip.filters.pole_placement import (
+    bicycle_coupling,
+    closed_loop,
+    double_pole_step,
+    reachable_pole,
+    single_output_gain,
+    two_output_gain,
+)
+from sideslip.methods.registry import SPEED, register
+from sideslip.methods.roll_index import ROLL_PARAMS, Inputs, estimate_roll_index, sensor_inputs
+from sideslip.models.roll import compensate_ay
+from sideslip.models.single_track import continuous_arrays
+from sideslip.vehicle import Vehicle
+
+FloatArray = NDArray[np.float64]
+
+V_GATE = 5.0  # m/s: observers run above this forward speed
+P_BICYCLE = -20.0  # rad/s: double pole of the simple bicycle observer (see module docstring)
+P_MODIFIED = -20.0  # rad/s: double pole of the modified bicycle observer
+ALPHA = 2.0  # kinematic observer: poles at -ALPHA |r|
+R_OBSERVABLE = 0.05  # rad/s (~3 deg/s): below, v_y is taken as weakly observable
+TAU_STRAIGHT = 2.0  # s: pull of v_y towards 0 when |r| -> 0
+COUPLING_FRACTION = 0.03  # obs_bicycle: full pole placement when |cf lf - cr lr| >= 3 % of sum
+BETA_MAX = 1.2  # rad
+R_MAX = 5.0  # rad/s
+
+MODEL_PARAMS = ("mass", "yaw_inertia", "lf", "lr", "cf", "cr")
+
+
+# ------------------------------------------------------------------------------------------
+# compiled loops
+# ------------------------------------------------------------------------------------------
+@numba.njit(cache=True)
+def _open_loop(x0: float, x1: float, A: NDArray, bu: NDArray, h: float
+               ) -> tuple[float, float]:  # pragma: no cover - compiled
+    """RK4 of x' = A x + bu over h, sub-stepped so that |lambda h_sub| <= 0.5."""
+    scale = max(abs(A[0, 0]) + abs(A[0, 1]), abs(A[1, 0]) + abs(A[1, 1]))
+    n_sub = min(10000, int(h * scale / 0.5) + 1)
+    hs = h / n_sub
+    for _ in range(n_sub):
+        k10 = A[0, 0] * x0 + A[0, 1] * x1 + bu[0]
+        k11 = A[1, 0] * x0 + A[1, 1] * x1 + bu[1]
+        y0, y1 = x0 + 0.5 * hs * k10, x1 + 0.5 * hs * k11
+        k20 = A[0, 0] * y0 + A[0, 1] * y1 + bu[0]
+        k21 = A[1, 0] * y0 + A[1, 1] * y1 + bu[1]
+        y0, y1 = x0 + 0.5 * hs * k20, x1 + 0.5 * hs * k21
+        k30 = A[0, 0] * y0 + A[0, 1] * y1 + bu[0]
+        k31 = A[1, 0] * y0 + A[1, 1] * y1 + bu[1]
+        y0, y1 = x0 + hs * k30, x1 + hs * k31
+        k40 = A[0, 0] * y0 + A[0, 1] * y1 + bu[0]
+        k41 = A[1, 0] * y0 + A[1, 1] * y1 + bu[1]
+        x0 += hs / 6.0 * (k10 + 2.0 * k20 + 2.0 * k30 + k40)
+        x1 += hs / 6.0 * (k11 + 2.0 * k21 + 2.0 * k31 + k41)
+    return x0, x1
+
+
+@numba.njit(cache=True)
+def _run_bicycle_type(t: NDArray, Phi: NDArray, Gam: NDArray, w: NDArray, A: NDArray,
+                      bu: NDArray, fresh: NDArray, active: NDArray, x_init: NDArray
+                      ) -> NDArray:  # pragma: no cover - compiled
+    """x_{k+1} = Phi_k x_k + Gam_k w_k on fresh rows, open loop otherwise; reset when inactive."""
+    n = t.size
+    out = np.empty((n, 2))
+    x0, x1 = x_init[0, 0], x_init[0, 1]
+    for k in range(n):
+        if not active[k]:
+            x0, x1 = x_init[k, 0], x_init[k, 1]
+        out[k, 0] = x0
+        out[k, 1] = x1
+        if k == n - 1:
+            break
+        h = t[k + 1] - t[k]
+        if fresh[k]:
+            n0 = Phi[k, 0, 0] * x0 + Phi[k, 0, 1] * x1 + Gam[k, 0, 0] * w[k, 0] + Gam[k, 0, 1] * w[k, 1]
+            n1 = Phi[k, 1, 0] * x0 + Phi[k, 1, 1] * x1 + Gam[k, 1, 0] * w[k, 0] + Gam[k, 1, 1] * w[k, 1]
+            x0, x1 = n0, n1
+        else:
+            x0, x1 = _open_loop(x0, x1, A[k], bu[k], h)
+        if not (math.isfinite(x0) and math.isfinite(x1)):
+            x0, x1 = x_init[k + 1, 0], x_init[k + 1, 1]
+        x0 = min(max(x0, -BETA_MAX), BETA_MAX)
+        x1 = min(max(x1, -R_MAX), R_MAX)
+    return out
+
+
+@numba.njit(cache=True)
+def _run_kinematic(t: NDArray, r: NDArray, ax: NDArray, ay: NDArray, y: NDArray,
+                   fresh: NDArray, ydt: NDArray, active: NDArray, vx_init: NDArray,
+                   vy_init: NDArray, alpha: float, r_obs: float, tau: float
+                   ) -> NDArray:  # pragma: no cover - compiled
+    """Kinematic observer (module docstring): exact rotation between samples, correction at
+    fresh wheel-speed rows, pull of v_y to 0 when |r| < r_obs."""
+    n = t.size
+    out = np.empty((n, 2))
+    vx, vy = vx_init[0], vy_init[0]
+    for k in range(n):
+        if not active[k]:
+            vx, vy = vx_init[k], vy_init[k]
+        elif fresh[k] and k > 0 and active[k - 1]:
+            rk = r[k]
+            k1 = 2.0 * alpha * max(abs(rk), r_obs)
+            k2 = (alpha * alpha - 1.0) * rk
+            d = min(ydt[k], 0.2)
+            if k1 * d > 1.0:  # keep the discrete correction a contraction
+                d = 1.0 / k1
+            e = y[k] - vx
+            vx += k1 * d * e
+            vy += k2 * d * e
+        out[k, 0] = vx
+        out[k, 1] = vy
+        if k == n - 1:
+            break
+        h = t[k + 1] - t[k]
+        rk = r[k]
+        th = rk * h
+        c, s = math.cos(th), math.sin(th)
+        if abs(rk) > 1e-9:
+            g11, g12 = s / rk, (1.0 - c) / rk
+        else:
+            g11, g12 = h, 0.5 * rk * h * h
+        nvx = c * vx + s * vy + g11 * ax[k] + g12 * ay[k]
+        nvy = -s * vx + c * vy - g12 * ax[k] + g11 * ay[k]
+        leak = max(0.0, 1.0 - abs(rk) / r_obs)
+        vx, vy = nvx, nvy * math.exp(-h * leak / tau)
+        if not (math.isfinite(vx) and math.isfinite(vy)):
+            vx, vy = vx_init[k + 1], vy_init[k + 1]
+        vy = min(max(vy, -abs(vx) * 1.5), abs(vx) * 1.5)
+    return out
+
+
+# ------------------------------------------------------------------------------------------
+# shared pieces
+# ------------------------------------------------------------------------------------------
+def kinematic_beta(vx: FloatArray, delta: FloatArray, vehicle: Vehicle) -> FloatArray:
+    """No-slip bicycle sideslip at the CG: atan2(v_x l_r tan(delta)/L, v_x), rad."""
+    vy = vx * vehicle.lr * np.tan(np.clip(delta, -1.2, 1.2)) / vehicle.wheelbase
+    return np.asarray(np.arctan2(vy, vx), dtype=float)
+
+
+def _steps(t: FloatArray) -> FloatArray:
+    dt = np.diff(t)
+    return np.append(dt, dt[-1] if dt.size else 0.01)
+
+
+def _fresh(drive: Drive, *names: str) -> NDArray[np.bool_]:
+    ok = np.ones(len(drive), dtype=bool)
+    for name in names:
+        ok &= np.isfinite(drive[name]) if name in drive else False
+    return ok
+
+
+def run_bicycle_observer(inp: Inputs, vehicle: Vehicle, fresh: NDArray[np.bool_],
+                         pole: float = P_BICYCLE) -> tuple[FloatArray, FloatArray]:
+    """Simple bicycle observer (eqs 12-17) on prepared inputs: returns (beta, r_hat)."""
+    v = np.maximum(np.abs(inp.vx), V_GATE)
+    A, B, _, _ = continuous_arrays(vehicle, v)
+    b = B[:, :, 0]
+    ref = COUPLING_FRACTION * (vehicle.cf * vehicle.lf + vehicle.cr * vehicle.lr) / vehicle.yaw_inertia
+    p_eff = reachable_pole(A, pole, ref)
+    K = single_output_gain(A, p_eff)
+    M = closed_loop(A, K, np.array([[0.0, 1.0]]))
+    Phi, Gam = double_pole_step(M, p_eff, _steps(inp.t))
+    w = b * inp.delta[:, None] + K * inp.r[:, None]
+    return _run(inp, vehicle, Phi, Gam, w, A, b * inp.delta[:, None], fresh)
+
+
+def run_modified_observer(inp: Inputs, vehicle: Vehicle, ay: FloatArray, bank: FloatArray,
+                          fresh: NDArray[np.bool_], pole: float = P_MODIFIED
+                          ) -> tuple[FloatArray, FloatArray]:
+    """Modified bicycle observer (eqs 33-39) with lateral acceleration ``ay`` (m/s^2) and the
+    road ``bank`` (rad) as a known input (zeros: the paper's flat-road model)."""
+    v = np.maximum(np.abs(inp.vx), V_GATE)
+    A, B, C, D = continuous_arrays(vehicle, v)
+    u = np.stack([inp.delta, np.sin(bank)], axis=1)
+    bu = np.einsum("nij,nj->ni", B, u)
+    du = np.einsum("nij,nj->ni", D, u)
+    q = bicycle_coupling(vehicle.cf, vehicle.cr, vehicle.lf, vehicle.lr, vehicle.yaw_inertia)
+    K = two_output_gain(A, C, pole, q)
+    M = closed_loop(A, K, C)
+    Phi, Gam = double_pole_step(M, pole, _steps(inp.t))
+    y = np.stack([inp.r, ay], axis=1)
+    w = bu + np.einsum("nij,nj->ni", K, y - du)
+    return _run(inp, vehicle, Phi, Gam, w, A, bu, fresh)
+
+
+def _run(inp: Inputs, vehicle: Vehicle, Phi: FloatArray, Gam: FloatArray, w: FloatArray,
+         A: FloatArray, bu: FloatArray, fresh: NDArray[np.bool_]
+         ) -> tuple[FloatArray, FloatArray]:
+    active = inp.vx >= V_GATE
+    x_init = np.stack([kinematic_beta(inp.vx, inp.delta, vehicle), inp.r], axis=1)
+    x = _run_bicycle_type(inp.t, Phi, Gam, w, A, bu, fresh, active, x_init)
+    beta = np.where(active, x[:, 0], x_init[:, 0])
+    return beta, x[:, 1]
+
+
+def run_kinematic_observer(inp: Inputs, vehicle: Vehicle, ay: FloatArray,
+                           alpha: float = ALPHA) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Kinematic observer (eqs 18-30) with lateral acceleration ``ay``: (beta, v_x, v_y)."""
+    active = inp.vx >= V_GATE
+    beta_kin = kinematic_beta(inp.vx, inp.delta, vehicle)
+    vy_init = inp.vx * np.tan(np.clip(beta_kin, -1.2, 1.2))
+    vy_init = np.where(inp.vx >= 0, vy_init, inp.vx * vehicle.lr * np.tan(inp.delta)
+                       / vehicle.wheelbase)
+    x = _run_kinematic(inp.t, inp.r, inp.ax, ay, inp.vx, inp.speed_fresh, inp.speed_dt,
+                       active, inp.vx.copy(), vy_init, alpha, R_OBSERVABLE, TAU_STRAIGHT)
+    vx = np.where(active, x[:, 0], inp.vx)
+    vy = np.where(active, x[:, 1], vy_init)
+    beta = np.where(active, np.arctan2(vy, np.maximum(vx, 0.1)), beta_kin)
+    return beta, vx, vy
+
+
+def _params(pole: float, **extra: object) -> dict[str, object]:
+    return {"pole": pole, "v_gate_mps": V_GATE, **extra}
+
+
+# ------------------------------------------------------------------------------------------
+# registered methods
+# ------------------------------------------------------------------------------------------
+@register(
+    "obs_bicycle",
+    columns=("wz", "steer", SPEED),
+    summary="simple bicycle-model Luenberger observer, yaw-rate output, double pole",
+    paper="seed 003 (eqs 10-17)",
+    vehicle_params=MODEL_PARAMS,
+)
+def obs_bicycle(drive: Drive, vehicle: Vehicle) -> Estimate:
+    """Sideslip from the single-track model corrected by the gyro (module docstring)."""
+    inp = sensor_inputs(drive)
+    beta, r_hat = run_bicycle_observer(inp, vehicle, _fresh(drive, "wz"))
+    return Estimate("obs_bicycle", drive.t,
+                    {"beta": beta, "r": r_hat, "gyro_bias": inp.gyro_bias},
+                    _params(P_BICYCLE))
+
+
+@register(
+    "obs_kinematic",
+    columns=("wz", "ax", "ay", "steer", SPEED),
+    summary="kinematic observer on v_x, v_y with wheel-speed output, gains 2a|r|, (a^2-1)r",
+    paper="seed 003 (eqs 18-30)",
+    vehicle_params=ROLL_PARAMS,
+)
+def obs_kinematic(drive: Drive, vehicle: Vehicle) -> Estimate:
+    """Kinematic observer with the roll-compensated lateral acceleration (module docstring)."""
+    inp = sensor_inputs(drive)
+    roll = estimate_roll_index(inp, vehicle)
+    ay = compensate_ay(inp.ay_m, roll.roll)
+    beta, vx, vy = run_kinematic_observer(inp, vehicle, ay)
+    return Estimate(
+        "obs_kinematic", drive.t,
+        {"beta": beta, "vx": vx, "vy": vy, "r": inp.r, "roll": roll.roll, "bank": roll.bank,
+         "gyro_bias": inp.gyro_bias},
+        {"alpha": ALPHA, "r_observable": R_OBSERVABLE, "tau_straight_s": TAU_STRAIGHT,
+         "v_gate_mps": V_GATE, "speed_source": "rear wheels, else all wheels, else v_can"},
+    )
+
+
+@register(
+    "obs_modified",
+    columns=("wz", "ay", "steer", SPEED),
+    summary="seed 003's modified bicycle observer (outputs r, a_y) with roll-index compensation",
+    paper="seed 003 (eqs 31-39, 61-62)",
+    vehicle_params=(*MODEL_PARAMS, *ROLL_PARAMS[5:]),
+)
+def obs_modified(drive: Drive, vehicle: Vehicle) -> Estimate:
+    """Modified bicycle observer fed a_y = a_ym - g sin(roll) (module docstring)."""
+    inp = sensor_inputs(drive)
+    roll = estimate_roll_index(inp, vehicle)
+    ay = compensate_ay(inp.ay_m, roll.roll)
+    beta, _ = run_modified_observer(inp, vehicle, ay, roll.bank, _fresh(drive, "wz", "ay"))
+    return Estimate(
+        "obs_modified", drive.t,
+        {"beta": beta, "r": inp.r, "roll": roll.roll, "bank": roll.bank,
+         "gyro_bias": inp.gyro_bias},
+        _params(P_MODIFIED, compensation="roll_index",
+                lambda_fraction=float(np.mean(roll.lam))),
+    )
+
+
+@register(
+    "obs_modified_nocomp",
+    columns=("wz", "ay", "steer", SPEED),
+    summary="modified bicycle observer fed the raw a_y (no gravity compensation; comparison)",
+    paper="seed 003 (eqs 31-39)",
+    vehicle_params=MODEL_PARAMS,
+)
+def obs_modified_nocomp(drive: Drive, vehicle: Vehicle) -> Estimate:
+    """Modified bicycle observer fed the measured a_ym, gravity included (module docstring)."""
+    inp = sensor_inputs(drive)
+    beta, _ = run_modified_observer(inp, vehicle, inp.ay_m, np.zeros_like(inp.ay_m),
+                                        _fresh(drive, "wz", "ay"))
+    return Estimate(
+        "obs_modified_nocomp", drive.t,
+        {"beta": beta, "r": inp.r, "gyro_bias": inp.gyro_bias},
+        _params(P_MODIFIED, compensation="none"),
+    )

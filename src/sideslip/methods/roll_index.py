@@ -1,0 +1,386 @@
+"""Roll and bank from IMU, wheel speed and steering (seed 003, IEEE Access 2020, Sec. III).
+
+Two registered methods:
+
+* ``roll_index`` -- the paper's proposal (eqs 41-61): the total roll (suspension roll + road
+  bank) is the static bank angle ``phi_ss`` (eq 46) while the roll index lambda = 1, and the
+  last static value plus the change of the suspension roll (eq 41) while lambda = 0 (eq 61).
+* ``roll_dfc`` -- Tseng's dynamic bank (eqs 49-58), the paper's comparison.
+
+Both write ``roll`` (total roll, rad, ISO sign: right side down positive) and ``bank`` (rad,
+roll sign).  ``roll_index`` writes ``bank = roll - phi_sus`` with phi_sus from eq 41;
+``roll_dfc`` writes ``bank = w (phi_ss - phi_sus)`` with w the factor of eq 58.
+
+Measurements (held onto every row; only the IMU rows carry new samples): ``ay`` a_ym (m/s^2,
+lateral specific force), ``wz`` r (rad/s, zeroed at standstill, see :func:`sensor_inputs`),
+v_x (m/s, undriven = rear wheels, else all wheels, else ``v_can``), ``steer`` delta (front
+road-wheel angle, rad).  Signs: see :mod:`sideslip.models.roll` (the paper's Phi is minus ours).
+
+The roll index (eq 60), as implemented -- the extracted text cannot be taken literally
+-------------------------------------------------------------------------------------
+Eq 60 writes lambda = f g h k, but with the flags as printed the product is never 1 (h needs
+|r| < 0.3 deg/s while k needs delta r > 1500 deg^2/s), and g as printed (phi_ay phi_r < 0)
+contradicts its own description ("presence of a road bank"): on a bank in a steady state
+eqs 55 and 56 both return the bank angle and share its sign, while opposite signs are what a
+steering transient on flat ground produces (r lags the steering, so eq 56 and eq 55 swing
+opposite ways).  We keep every flag, threshold and hold time of the paper and combine them as
+their descriptions say:
+
+    lambda = f * k * (g or h)          (and lambda = 1 below ``V_MIN``)
+
+* f = 1: steady state, |d/dt(|phi_ay' - phi_ss'| - |phi_r' - phi_ss'|)| < 25 deg/s^2 for 0.4 s;
+* g = 1: bank present, phi_ay phi_r > 0 for 0.4 s.  Eq 56 is fragile: a steering offset d0
+  moves phi_r by d0/(K_us g) at any speed (0.1 deg on seed 003's car, K_us = 6e-4 rad/(m/s^2):
+  17 deg), and in a turn it cancels two large terms that depend on K_us.  Where its error
+  (:func:`yaw_bank_resolution`: steering offset, 30 % understeer-gradient error, gyro bias)
+  exceeds |phi_ay|, the yaw channel cannot resolve the bank and the sign test is skipped
+  (counts as agreeing); it bites for strongly understeering cars, large banks, small steering.
+  (f keeps its phi_r term: eq 56's swing with the steering rate, delta'/(K_us g), is what makes
+  f see steering transients early; its price is the delay at the end of a bank ramp, where
+  the steering unwinds -- the delay the paper reports in Fig 7a);
+* h = 1: straight and flat, |delta| < 0.5 deg, |delta'| < 0.1 deg/s (road-wheel angle, the
+  paper's delta_f), |r| < 0.3 deg/s for ``T_STRAIGHT`` s (the paper gives no value for t_TH3);
+* k = 1: no urgent steering, i.e. |delta_sw r| <= 1500 deg^2/s throughout the last 1.5 s,
+  with delta_sw = steering_ratio * delta the steering-wheel angle: with the road-wheel angle
+  this threshold would be unreachable (1500 deg^2/s needs r = 300 deg/s at 5 deg), so the
+  paper's K_TH must refer to the steering wheel.  (With the steering wheel, h's 0.5 deg would
+  in turn be below a typical steering-sensor offset of 0.1 deg road wheel = 1.6 deg wheel.)
+lambda = 1 when straight (h) re-anchors the integration to phi_ss ~ 0 on a level road; when the
+static estimate is trusted on a bank (f g k) it tracks the bank; everywhere else (steering
+transients, urgent steering) eq 61 adds the suspension-roll change to the last static value.
+
+Noise handling: the flags differentiate twice, so their inputs are low-passed (second-order
+Butterworth, ``FLAG_CUTOFF_HZ``); the roll inputs at ``ROLL_CUTOFF_HZ``.  The filters start at
+the mean of the first ``START_S`` seconds (the only look-ahead; everything else is causal).
+Sensor errors: the paper assumes zeroed sensors; here the gyro is zeroed at standstill only,
+so a gyro bias b moves the static bank by v b / g (0.2 deg/s at 140 km/h: ~0.8 deg) -- the
+main error on flat high-speed drives.  Low speed and standstill: below ``V_MIN`` the Tseng
+gains degenerate, lambda is forced to 1 and phi_ss is the accelerometer's tilt (exact at
+standstill, a_ym = g sin(phi)); the outputs stay finite on every row (NaN gaps are held by a
+zero-order hold; rows before a sensor's first sample take that first sample).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.signal import butter, sosfilt, sosfilt_zi
+
+from sideslip.drive import Drive
+from sideslip.estimate import Estimate
+from sideslip.methods.registry import SPEED, register
+from sideslip.models.roll import (
+    dynamic_bank_weight,
+    dynamic_factor,
+    sin_roll_from_ay,
+    sin_roll_from_r,
+    suspension_roll,
+    tseng_gains,
+)
+from sideslip.signals import hold, speed_raw, standstill
+from sideslip.vehicle import G, Vehicle
+
+FloatArray = NDArray[np.float64]
+BoolArray = NDArray[np.bool_]
+
+DEG = math.pi / 180.0
+V_MIN = 5.0  # m/s: below, lambda = 1 (Tseng's gains degenerate; v_y' is small when slow)
+ROLL_CUTOFF_HZ = 2.0  # low-pass of a_ym, r, delta for the roll estimates (IMU noise)
+FLAG_CUTOFF_HZ = 1.0  # low-pass of the signals the flags differentiate
+# Paper's thresholds (Sec. III-D), SI:
+F_TH = 25.0 * DEG  # rad/s^2
+T_TH1 = 0.4  # s
+T_TH2 = 0.4  # s
+G_TH1 = 0.5 * DEG  # rad (road wheel)
+G_TH2 = 0.1 * DEG  # rad/s (road wheel)
+G_TH3 = 0.3 * DEG  # rad/s
+T_STRAIGHT = 1.0  # s: t_TH3, not given in the paper
+K_TH = 1500.0 * DEG**2  # rad^2/s (steering wheel x yaw rate)
+T_TH4 = 1.5  # s
+START_S = 0.2  # s: initial level of the low-pass filters
+STEER_OFFSET_TOL = 0.1 * DEG  # rad: typical steering-angle offset (road wheel) after calibration
+KUS_REL_TOL = 0.3  # relative error of the understeer gradient (tyre stiffness 30 % off)
+GYRO_BIAS_TOL = 0.2 * DEG  # rad/s: typical MEMS gyro turn-on bias
+STANDSTILL_MIN_S = 0.5  # s of standstill before its gyro mean is used as the gyro bias
+
+ROLL_PARAMS = (
+    "mass", "lf", "lr", "cf", "cr", "cg_height", "roll_axis_height", "roll_stiffness",
+    "roll_damping", "roll_inertia", "steering_ratio",
+)  # fmt: skip
+
+
+@dataclass(frozen=True)
+class Inputs:
+    """Sensor signals held onto every row of the drive (SI units).
+
+    ay_m: lateral specific force; r: yaw rate minus ``gyro_bias``; vx: longitudinal speed
+    (signed when the sensor is); delta: road-wheel angle; gyro_bias: the standstill gyro mean
+    used (rad/s, 0 until ``STANDSTILL_MIN_S`` of standstill has been seen); ax: longitudinal
+    specific force (zeros when the drive has no ``ax``); speed_fresh: rows with a new speed
+    sample; speed_dt: time since the previous speed sample at those rows (s).
+    """
+
+    t: FloatArray
+    ay_m: FloatArray
+    ax: FloatArray
+    r: FloatArray
+    vx: FloatArray
+    delta: FloatArray
+    gyro_bias: FloatArray
+    speed_fresh: BoolArray
+    speed_dt: FloatArray
+
+
+def _first(values: FloatArray) -> float:
+    ok = np.isfinite(values)
+    return float(values[ok][0]) if ok.any() else 0.0
+
+
+def _held(drive: Drive, name: str) -> FloatArray:
+    if name not in drive:
+        return np.zeros_like(drive.t)
+    values = drive[name]
+    held, _ = hold(values, drive.t, fill=_first(values))
+    return held
+
+
+def standstill_gyro_bias(t: FloatArray, wz: FloatArray, still: BoolArray) -> FloatArray:
+    """Causal gyro zeroing (the paper assumes zeroed sensors, refs [26, 27]).
+
+    Running mean of ``wz`` over the standstill rows seen so far, used once at least
+    ``STANDSTILL_MIN_S`` of standstill has accumulated; 0 before.  rad/s on every row.
+    """
+    use = still & np.isfinite(wz)
+    dt = np.diff(t, prepend=t[0])
+    count = np.cumsum(use)
+    total = np.cumsum(np.where(use, wz, 0.0))
+    seen = np.cumsum(np.where(use, dt, 0.0))
+    bias = np.where(count > 0, total / np.maximum(count, 1), 0.0)
+    return np.where(seen >= STANDSTILL_MIN_S, bias, 0.0)
+
+
+def sensor_inputs(drive: Drive) -> Inputs:
+    """Hold the sensors onto every row; zero the gyro at standstill; see :class:`Inputs`."""
+    t = drive.t
+    raw_speed = speed_raw(drive)
+    if raw_speed is None:
+        vx = np.zeros_like(t)
+        fresh = np.zeros(t.size, dtype=bool)
+    else:
+        vx, _ = hold(raw_speed, t, fill=_first(raw_speed))
+        fresh = np.isfinite(raw_speed)
+    rows = np.flatnonzero(fresh)
+    speed_dt = np.zeros_like(t)
+    if rows.size:
+        prev = np.concatenate(([rows[0]], rows[:-1]))
+        speed_dt[rows] = t[rows] - t[prev]
+        speed_dt[rows[0]] = drive.dt_median
+    wz = drive["wz"] if "wz" in drive else np.zeros_like(t)
+    still = standstill(drive) if raw_speed is not None else np.zeros(t.size, dtype=bool)
+    bias = standstill_gyro_bias(t, wz, still)
+    return Inputs(
+        t=t,
+        ay_m=_held(drive, "ay"),
+        ax=_held(drive, "ax"),
+        r=_held(drive, "wz") - bias,
+        vx=vx,
+        delta=_held(drive, "steer"),
+        gyro_bias=bias,
+        speed_fresh=fresh,
+        speed_dt=speed_dt,
+    )
+
+
+def lowpass(x: FloatArray, t: FloatArray, cutoff_hz: float) -> FloatArray:
+    """Causal second-order Butterworth low-pass at the drive's median rate, started at rest
+    on the mean of the first ``START_S`` seconds (a single noisy first sample would otherwise
+    bias the start).  Returns ``x`` unchanged when too short to filter."""
+    if x.size < 8:
+        return x.copy()
+    dt = float(np.median(np.diff(t)))
+    nyq = 0.5 / dt
+    if cutoff_hz >= 0.9 * nyq:
+        return x.copy()
+    sos = butter(2, cutoff_hz / nyq, output="sos")
+    x0 = float(np.mean(x[t <= t[0] + START_S]))
+    y, _ = sosfilt(sos, x, zi=sosfilt_zi(sos) * x0)
+    return np.asarray(y, dtype=float)
+
+
+def ddt(x: FloatArray, t: FloatArray) -> FloatArray:
+    """Causal backward difference dx/dt (0 on the first row)."""
+    out = np.zeros_like(x)
+    out[1:] = np.diff(x) / np.diff(t)
+    return out
+
+
+def held_for(cond: BoolArray, t: FloatArray, duration: float) -> BoolArray:
+    """True where ``cond`` has held on every row of the last ``duration`` seconds."""
+    idx = np.where(~cond, np.arange(cond.size), -1)
+    np.maximum.accumulate(idx, out=idx)
+    since = np.where(idx >= 0, t - t[np.maximum(idx, 0)], t - t[0] + duration)
+    return cond & (since >= duration)
+
+
+def seen_within(cond: BoolArray, t: FloatArray, duration: float) -> BoolArray:
+    """True where ``cond`` was true on some row of the last ``duration`` seconds."""
+    idx = np.where(cond, np.arange(cond.size), -1)
+    np.maximum.accumulate(idx, out=idx)
+    return (idx >= 0) & (t - t[np.maximum(idx, 0)] <= duration)
+
+
+@dataclass(frozen=True)
+class RollEstimate:
+    """Roll-index result: rad, on every row.  Flags are 0/1 arrays; ``lam`` is lambda."""
+
+    roll: FloatArray
+    bank: FloatArray
+    phi_ss: FloatArray
+    phi_ay: FloatArray
+    phi_r: FloatArray
+    phi_sus: FloatArray
+    lam: BoolArray
+    f: BoolArray
+    g: BoolArray
+    h: BoolArray
+    k: BoolArray
+
+
+def _channels(inp: Inputs, vehicle: Vehicle, cutoff: float
+              ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
+    """sin of phi_ss (eq 46), phi_ay (eq 55), phi_r (eq 56) on low-passed inputs."""
+    t = inp.t
+    ay = lowpass(inp.ay_m, t, cutoff)
+    r = lowpass(inp.r, t, cutoff)
+    d = lowpass(inp.delta, t, cutoff)
+    v = np.abs(inp.vx)
+    gains = tseng_gains(v, vehicle.wheelbase, vehicle.understeer_gradient)
+    s_ss = np.clip((ay - r * v) / G, -1.0, 1.0)
+    s_ay = sin_roll_from_ay(ay, d, gains)
+    s_r = sin_roll_from_r(r, d, gains)
+    dfc = dynamic_factor(s_ay, s_r, s_ss, v, gains)
+    return s_ss, s_ay, s_r, dfc, ay, d
+
+
+def yaw_bank_resolution(vehicle: Vehicle, speed: FloatArray, delta: FloatArray) -> FloatArray:
+    """Error (rad, per row) of eq 56's roll from typical sensor and parameter errors.
+
+    sin(phi_r) = (r - H_delta->r delta)/H_phi->r with H_delta->r/|H_phi->r| = 1/(K_us g):
+    a steering offset d0 and a relative error e_K of the understeer gradient (a cancellation of
+    two large terms in a turn) move it by (d0 + e_K |delta|)/(K_us g); a gyro bias b_r by
+    b_r (L + K_us v^2)/(v K_us g).  d0 = ``STEER_OFFSET_TOL``, e_K = ``KUS_REL_TOL``,
+    b_r = ``GYRO_BIAS_TOL``.
+    """
+    kus = abs(vehicle.understeer_gradient)
+    if kus < 1e-9:
+        return np.full(speed.shape, np.inf)
+    v = np.maximum(speed, 1.0)
+    steer = (STEER_OFFSET_TOL + KUS_REL_TOL * np.abs(delta)) / (kus * G)
+    gyro = GYRO_BIAS_TOL * (vehicle.wheelbase + kus * v**2) / (v * kus * G)
+    return np.asarray(steer + gyro, dtype=float)
+
+
+def estimate_roll_index(inp: Inputs, vehicle: Vehicle) -> RollEstimate:
+    """Eqs 41-61 with the roll index as described in the module docstring."""
+    t = inp.t
+    moving = np.abs(inp.vx) >= V_MIN
+    s_ss, s_ay, s_r, _, ay_f, _ = _channels(inp, vehicle, ROLL_CUTOFF_HZ)
+    phi_ss = np.arcsin(s_ss)
+    # flags on more strongly smoothed channels
+    fs_ss, fs_ay, fs_r, _, _, d_f = _channels(inp, vehicle, FLAG_CUTOFF_HZ)
+    f_ss, f_ay, f_r = np.arcsin(fs_ss), np.arcsin(fs_ay), np.arcsin(fs_r)
+    d_ss, d_ay, d_r = ddt(f_ss, t), ddt(f_ay, t), ddt(f_r, t)
+    shape = ddt(np.abs(d_ay - d_ss) - np.abs(d_r - d_ss), t)
+    shape = lowpass(shape, t, FLAG_CUTOFF_HZ)
+    f = held_for(np.abs(shape) < F_TH, t, T_TH1)
+    # the yaw channel resolves a bank only beyond its own error (docstring)
+    resolves = yaw_bank_resolution(vehicle, np.abs(inp.vx), d_f) < np.abs(f_ay)
+    g = held_for((f_ay * f_r > 0.0) | ~resolves, t, T_TH2)
+    r_f = lowpass(inp.r, t, FLAG_CUTOFF_HZ)
+    h = held_for(
+        (np.abs(d_f) < G_TH1) & (np.abs(ddt(d_f, t)) < G_TH2) & (np.abs(r_f) < G_TH3),
+        t, T_STRAIGHT,
+    )
+    d_sw = vehicle.steering_ratio * d_f
+    k = ~seen_within(np.abs(d_sw * r_f) > K_TH, t, T_TH4)
+    lam = (f & k & (g | h)) | ~moving
+    phi_sus = suspension_roll(t, ay_f, vehicle)
+    # eq 61: anchor = last row with lambda = 1 (phi*_ss is phi_ss there)
+    idx = np.where(lam, np.arange(t.size), -1)
+    np.maximum.accumulate(idx, out=idx)
+    anchor = np.maximum(idx, 0)
+    roll = np.where(lam, phi_ss, phi_ss[anchor] + phi_sus - phi_sus[anchor])
+    return RollEstimate(
+        roll=roll, bank=roll - phi_sus, phi_ss=phi_ss, phi_ay=np.arcsin(s_ay),
+        phi_r=np.arcsin(s_r), phi_sus=phi_sus, lam=lam, f=f, g=g, h=h, k=k,
+    )
+
+
+def estimate_roll_dfc(inp: Inputs, vehicle: Vehicle) -> tuple[FloatArray, FloatArray]:
+    """Tseng's dynamic bank (eqs 55-58): returns (roll, bank), rad.
+
+    roll = asin(sin(phi_ss) w), w = max(0, 1 - |DFC| - |d sin(phi_ss)/dt|) (eq 58, DFC in
+    m/s^2 as written); bank = w (phi_ss - phi_sus) removes the suspension roll of eq 41 (the
+    steady phi_ss is bank + suspension roll).  Below ``V_MIN``, w = 1.
+    """
+    t = inp.t
+    s_ss, _, _, dfc, ay_f, _ = _channels(inp, vehicle, ROLL_CUTOFF_HZ)
+    w = dynamic_bank_weight(dfc, ddt(s_ss, t))
+    w = np.where(np.abs(inp.vx) >= V_MIN, w, 1.0)
+    phi_sus = suspension_roll(t, ay_f, vehicle)
+    roll = np.arcsin(np.clip(s_ss * w, -1.0, 1.0))
+    return roll, w * (np.arcsin(s_ss) - phi_sus)
+
+
+def _fraction(x: BoolArray) -> float:
+    return float(np.mean(x)) if x.size else 0.0
+
+
+@register(
+    "roll_index",
+    columns=("wz", "ay", "steer", SPEED),
+    summary="roll/bank by seed 003's roll index: static bank when steady, suspension roll else",
+    paper="seed 003 (eqs 41-61)",
+    vehicle_params=ROLL_PARAMS,
+)
+def roll_index(drive: Drive, vehicle: Vehicle) -> Estimate:
+    """Total roll and road bank by the roll index (see module docstring)."""
+    inp = sensor_inputs(drive)
+    est = estimate_roll_index(inp, vehicle)
+    return Estimate(
+        "roll_index",
+        drive.t,
+        {"roll": est.roll, "bank": est.bank, "gyro_bias": inp.gyro_bias},
+        {
+            "lambda_fraction": _fraction(est.lam),
+            "flag_fraction": {"f": _fraction(est.f), "g": _fraction(est.g),
+                              "h": _fraction(est.h), "k": _fraction(est.k)},
+            "v_min_mps": V_MIN,
+            "roll_cutoff_hz": ROLL_CUTOFF_HZ,
+            "flag_cutoff_hz": FLAG_CUTOFF_HZ,
+            "understeer_gradient": vehicle.understeer_gradient,
+        },
+    )
+
+
+@register(
+    "roll_dfc",
+    columns=("wz", "ay", "steer", SPEED),
+    summary="roll/bank by Tseng's dynamic factor (seed 003's comparison)",
+    paper="seed 003 (eqs 46, 49-58; Tseng)",
+    vehicle_params=ROLL_PARAMS[:-1],
+)
+def roll_dfc(drive: Drive, vehicle: Vehicle) -> Estimate:
+    """Tseng's dynamic bank estimate as roll, and the bank without suspension roll."""
+    inp = sensor_inputs(drive)
+    roll, bank = estimate_roll_dfc(inp, vehicle)
+    return Estimate(
+        "roll_dfc",
+        drive.t,
+        {"roll": roll, "bank": bank, "gyro_bias": inp.gyro_bias},
+        {"v_min_mps": V_MIN, "roll_cutoff_hz": ROLL_CUTOFF_HZ,
+         "understeer_gradient": vehicle.understeer_gradient},
+    )
