@@ -536,7 +536,9 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, noise: FusedNoise | None 
     wz, ax, ay = col("wz"), col("ax"), col("ay")
     wx, wy = col("wx"), col("wy")
     raw = speed_raw(drive)
-    vw = np.full(n, np.nan) if raw is None else np.abs(raw)
+    # signed: a drive whose wheel speeds carry the sign reverses correctly; one with magnitudes
+    # only is taken as driving forwards (GNSS then disagrees, and the Huber weights limit harm)
+    vw = np.full(n, np.nan) if raw is None else raw
     ve = drive["gnss_ve"] if "gnss_ve" in drive else np.full(n, np.nan)
     vn = drive["gnss_vn"] if "gnss_vn" in drive else np.full(n, np.nan)
     ge = drive["gnss_e"] if "gnss_e" in drive else np.full(n, np.nan)
@@ -616,7 +618,7 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, noise: FusedNoise | None 
     )
 
 
-COLUMNS = ("wz", "ay", "ax", SPEED, "gnss_ve", "gnss_vn")
+COLUMNS = ("wz", "ay", SPEED, "gnss_ve", "gnss_vn")  # ax, wx, wy, gnss_e/n used when present
 PAPER = "this toolkit (fuses seeds 000, 001, 004 ideas)"
 
 

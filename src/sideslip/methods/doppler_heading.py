@@ -1,0 +1,313 @@
+"""Heading and gyro offset from GNSS Doppler course and the yaw gyro (seed 000, its ref [1]).
+
+Least-squares fit of the integrated yaw rate to the Doppler course over the whole drive, with
+iterative rejection of outliers (multipath), as in seed 000 ("we use least-squares fitting of
+GNSS Doppler and IMU yaw-rate values ... a long time series ... removing outliers").
+
+Model (heading of the body x axis, rad, unwrapped, from East counter-clockwise)::
+
+    psi(t) = psi0 + (1 + s) I(t) - B(t),   I(t) = int_0^t w_h dt,   B(t) = int_0^t b(t') dt'
+
+* ``w_h`` (rad/s): the z gyro projected on the vertical, ``wz / (cos(theta) cos(phi))`` (eq 3);
+* ``b(t)`` (rad/s): gyro offset, measured minus true, piecewise linear between knots every
+  ``knot_spacing_s`` (a random-walk prior on the knot differences lets a MEMS offset drift);
+* ``s`` (-): gyro scale-factor correction, true rate = (1 + s) w_h - b (prior sigma 0.02), so a
+  wrong gyro gain does not leak into the heading through every turn.
+
+Parameter vector x = [psi0 (rad), s (-), b_0 ... b_M (rad/s)].  Measurements:
+
+* Doppler course nu = atan2(v_n, v_e) at fresh GNSS samples (age 0) above ``min_speed``, turned
+  by pi while reversing, minus the known part of the antenna's sideslip (``course_offset``:
+  geometric lever-arm term and, on a second pass, the modelled slip; see ``doppler_slip``);
+  1-sigma ``sigma_v / V`` (rad) with sigma_v from ``gnss_vel_std`` when present.
+* Standstill: the gyro reads its offset alone, b(t) = wz (1-s block means).
+
+Only low-lateral-acceleration samples are used (chosen by the caller), where the course equals
+the heading up to a small, modelled sideslip.  Outliers: residuals beyond
+``max(4 sigma_robust, 3 sigma_i)`` (sigma_robust = 1.4826 MAD) are dropped and the fit repeated
+until the kept set no longer changes.  Residuals are re-wrapped about the prediction on every
+pass, so a course sample off by 2 pi is an outlier, not a lap.
+
+GNSS outages: the knots inside an outage are held by the random-walk prior (the offset carries
+over), the heading is the integrated gyro.  Standstill: heading stays put (w_h - b ~ 0).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from sideslip.drive import Drive
+from sideslip.errors import InputError
+from sideslip.frames import wrap_angle
+from sideslip.models.dead_reckoning import _cumtrapz
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.intp]
+
+HEADING_MIN_SPEED = 5.0  # m/s: Doppler course noise sigma_v/V is below ~1 deg above this
+DEFAULT_VEL_STD = 0.1  # m/s: Doppler 1-sigma when the drive gives no gnss_vel_std
+KNOT_SPACING_S = 60.0  # s between gyro-offset knots
+BIAS_RW = 1.0e-4  # rad/s change of the offset per knot interval, 1-sigma (MEMS drift)
+BIAS_PRIOR = 0.05  # rad/s, 1-sigma prior on the offset level (about 3 deg/s)
+SCALE_PRIOR = 0.02  # 1-sigma prior on the gyro scale correction s
+
+
+@dataclass(frozen=True)
+class CourseSamples:
+    """Fresh Doppler course samples: rows, course (rad, heading sense), speed (m/s), sigma (rad)."""
+
+    rows: IntArray
+    course: FloatArray
+    speed: FloatArray
+    sigma: FloatArray
+
+
+@dataclass(frozen=True)
+class HeadingFit:
+    """Result of :func:`fit_heading`.
+
+    ``yaw`` (rad, unwrapped) and ``gyro_bias`` (rad/s, measured minus true) on every row;
+    ``gyro_scale`` = 1 + s (multiplies the raw gyro); ``used`` the course samples kept (mask over
+    the selected samples); ``good`` (mask over all samples) those within the outlier bound of
+    the fitted heading; ``residual_std`` (rad) robust 1-sigma of the kept residuals.
+    """
+
+    yaw: FloatArray
+    gyro_bias: FloatArray
+    gyro_scale: float
+    yaw0: float
+    knots_t: FloatArray
+    knots_bias: FloatArray
+    used: NDArray[np.bool_]
+    good: NDArray[np.bool_]
+    residual_std: float
+    iterations: int
+
+    def params(self) -> dict[str, float | int]:
+        return {
+            "gyro_scale": self.gyro_scale,
+            "gyro_bias_mean_rad_s": float(np.mean(self.knots_bias)),
+            "heading_samples_used": int(self.used.sum()),
+            "heading_samples_rejected": int((~self.used).sum()),
+            "heading_residual_std_deg": float(np.degrees(self.residual_std)),
+            "heading_iterations": self.iterations,
+        }
+
+
+def course_samples(
+    drive: Drive, signed_speed: FloatArray, min_speed: float = HEADING_MIN_SPEED
+) -> CourseSamples:
+    """Fresh Doppler samples above ``min_speed``; course turned by pi where ``signed_speed`` < 0."""
+    if "gnss_ve" not in drive or "gnss_vn" not in drive:
+        empty = np.zeros(0)
+        return CourseSamples(np.zeros(0, dtype=np.intp), empty, empty, empty)
+    ve, vn = drive["gnss_ve"], drive["gnss_vn"]
+    speed = np.hypot(ve, vn)
+    rows = np.flatnonzero(np.isfinite(speed) & (speed > min_speed))
+    course = np.arctan2(vn[rows], ve[rows])
+    course = np.where(signed_speed[rows] < 0.0, wrap_angle(course + np.pi), course)
+    vstd = drive["gnss_vel_std"][rows] if "gnss_vel_std" in drive else np.full(rows.size, np.nan)
+    vstd = np.where(np.isfinite(vstd) & (vstd > 0), vstd, DEFAULT_VEL_STD)
+    sigma = np.maximum(vstd / speed[rows], np.radians(0.05))
+    return CourseSamples(rows, course, speed[rows], sigma)
+
+
+def check_yaw_rate_sign(
+    t: FloatArray, wz: FloatArray, samples: CourseSamples, path: str, min_turn_rad: float = 1.5
+) -> float | None:
+    """Fail when the yaw gyro turns the opposite way to the GNSS course.
+
+    Compares course changes between consecutive fresh samples (at most 1 s apart) with the
+    integrated ``wz`` over the same interval.  Returns their correlation, or None when the drive
+    turns too little (total |course change| below ``min_turn_rad``) to judge.  Raises
+    :class:`InputError` naming column ``wz`` when the correlation is below -0.5.
+    """
+    rows = samples.rows
+    if rows.size < 3:
+        return None
+    dt = np.diff(t[rows])
+    dcourse = wrap_angle(np.diff(samples.course))
+    turned = _cumtrapz(t, np.nan_to_num(wz))
+    dgyro = np.diff(turned[rows])
+    ok = (dt <= 1.0) & (np.abs(dcourse) < 0.5)
+    if ok.sum() < 3 or np.abs(dgyro[ok]).sum() < min_turn_rad:
+        return None
+    a, b = dcourse[ok], dgyro[ok]
+    denom = np.sqrt(np.sum(a * a) * np.sum(b * b))
+    corr = float(np.sum(a * b) / denom) if denom > 0 else 0.0
+    if corr < -0.5:
+        raise InputError(
+            path,
+            f"yaw rate turns opposite to the GNSS course (correlation {corr:.2f}): expected wz "
+            "> 0 in a left turn (ISO 8855, z up); is the gyro axis flipped?",
+            column="wz",
+        )
+    return corr
+
+
+def knot_times(t0: float, t1: float, spacing: float) -> FloatArray:
+    """Evenly spread knots covering [t0, t1] at most ``spacing`` apart (at least two)."""
+    count = max(int(np.ceil((t1 - t0) / spacing)), 1) + 1
+    return np.linspace(t0, t1, count)
+
+
+def hat_values(t: FloatArray, knots: FloatArray) -> FloatArray:
+    """(n, M) values of the piecewise-linear hat functions on ``knots`` at times ``t``."""
+    eye = np.eye(knots.size)
+    return np.stack([np.interp(t, knots, eye[j]) for j in range(knots.size)], axis=1)
+
+
+def hat_integrals(t: FloatArray, knots: FloatArray) -> FloatArray:
+    """(n, M) integrals from knots[0] to t of the hat functions on ``knots`` (exact)."""
+    eye = np.eye(knots.size)
+    return np.stack([_bias_integral_rows(t, knots, eye[j]) for j in range(knots.size)], axis=1)
+
+
+def _bias_integral_rows(t: FloatArray, knots: FloatArray, values: FloatArray) -> FloatArray:
+    """B(t) = int_{knots[0]}^t b dt with b piecewise linear through (knots, values); O(n)."""
+    at_knots = np.concatenate(([0.0], np.cumsum(0.5 * (values[1:] + values[:-1]) * np.diff(knots))))
+    j = np.clip(np.searchsorted(knots, t, side="right") - 1, 0, knots.size - 2)
+    h = np.clip(t - knots[j], 0.0, None)
+    slope = (values[j + 1] - values[j]) / (knots[j + 1] - knots[j])
+    out = at_knots[j] + values[j] * h + 0.5 * slope * h * h
+    return np.asarray(out, dtype=float)
+
+
+def _solve_normal(N: FloatArray, g: FloatArray) -> FloatArray:
+    """Solve the normal equations N x = g (symmetric, positive definite thanks to the priors).
+
+    The design is tall (GNSS epochs x ~2 + drive/60 s), so its Gram matrix is formed once per
+    fit and only the rejected rows are taken out per pass (much cheaper than an SVD per pass).
+    Columns are scaled to unit diagonal; an ill-conditioned system falls back to lstsq.
+    """
+    d = np.sqrt(np.clip(np.diag(N), 1e-300, None))
+    Ns = N / np.outer(d, d)
+    gs = g / d
+    try:
+        if np.linalg.cond(Ns) > 1e12:
+            raise np.linalg.LinAlgError("ill-conditioned")
+        L = np.linalg.cholesky(Ns)
+        z = np.linalg.solve(L.T, np.linalg.solve(L, gs))
+    except np.linalg.LinAlgError:
+        z = np.linalg.lstsq(Ns, gs, rcond=None)[0]
+    return np.asarray(z / d, dtype=float)
+
+
+def fit_heading(
+    t: FloatArray,
+    rate_h: FloatArray,
+    samples: CourseSamples,
+    select: NDArray[np.bool_],
+    course_offset: FloatArray | None = None,  # per sample (all samples, not only selected)
+    still_rows: IntArray | None = None,
+    wz_raw: FloatArray | None = None,
+    knot_spacing_s: float = KNOT_SPACING_S,
+    bias_rw: float = BIAS_RW,
+    max_iter: int = 10,
+) -> HeadingFit:
+    """Fit psi0, s and the offset knots to the Doppler course; see the module docstring.
+
+    ``rate_h``: vertical-projected raw gyro rate w_h on every row (rad/s, NaN-free).
+    ``select``: which of ``samples`` may enter the fit (e.g. low lateral acceleration).
+    ``course_offset``: rad per sample, subtracted from the course (antenna sideslip model).
+    ``still_rows``/``wz_raw``: standstill rows and the raw gyro, for offset pseudo-measurements.
+    With no usable course sample, the heading is the integrated gyro from 0 with the
+    standstill offset (or 0) and the fit reports ``residual_std`` = inf.
+    """
+    t = np.asarray(t, dtype=float)
+    knots = knot_times(float(t[0]), float(t[-1]), knot_spacing_s)
+    M = knots.size
+    integ = _cumtrapz(t, rate_h)
+    idx = np.flatnonzero(select)
+    rows = samples.rows[idx]
+    y = samples.course[idx] - (course_offset[idx] if course_offset is not None else 0.0)
+    sig = samples.sigma[idx]
+    i_meas = integ[rows]
+    A_c = np.zeros((rows.size, 2 + M))
+    A_c[:, 0] = 1.0
+    A_c[:, 1] = i_meas
+    A_c[:, 2:] = -hat_integrals(t[rows], knots)
+    # standstill pseudo-measurements of the offset: 1-s block means of the raw gyro
+    st_rows_A = np.zeros((0, 2 + M))
+    st_y = np.zeros(0)
+    st_sig = np.zeros(0)
+    if still_rows is not None and wz_raw is not None and still_rows.size > 10:
+        blocks = np.floor((t[still_rows] - t[0]) / 1.0).astype(np.intp)
+        _uniq, inv, counts = np.unique(blocks, return_inverse=True, return_counts=True)
+        sums = np.bincount(inv, weights=wz_raw[still_rows])
+        tsum = np.bincount(inv, weights=t[still_rows])
+        keep = counts >= 5
+        means = sums[keep] / counts[keep]
+        tb = tsum[keep] / counts[keep]
+        noise = float(np.std(wz_raw[still_rows])) if still_rows.size > 1 else 1e-3
+        st_rows_A = np.zeros((means.size, 2 + M))
+        st_rows_A[:, 2:] = hat_values(tb, knots)
+        st_y = means
+        st_sig = np.full(means.size, max(noise, 1e-5)) / np.sqrt(counts[keep]) + 2e-5
+    # priors: offset level, random walk between knots, scale correction
+    P = np.zeros((M + 1, 2 + M))
+    p_sig = np.zeros(M + 1)
+    P[0, 1] = 1.0
+    p_sig[0] = SCALE_PRIOR
+    P[1, 2] = 1.0
+    p_sig[1] = BIAS_PRIOR
+    for j in range(M - 1):
+        P[2 + j, 2 + j] = -1.0
+        P[2 + j, 3 + j] = 1.0
+        p_sig[2 + j] = bias_rw * np.sqrt((knots[j + 1] - knots[j]) / knot_spacing_s)
+    p_y = np.zeros(M + 1)
+
+    used = np.ones(rows.size, dtype=bool)
+    x = np.zeros(2 + M)
+    if still_rows is not None and st_y.size:
+        x[2:] = float(np.median(st_y))
+    # initial unwrap: the course relative to the integrated gyro drifts slowly
+    d = np.unwrap(wrap_angle(y - i_meas)) + i_meas if rows.size else y
+    resid_std = np.inf
+    iterations = 0
+    W = A_c / sig[:, None] if rows.size else np.zeros((0, 2 + M))
+    S = st_rows_A / st_sig[:, None]
+    Pw = P / p_sig[:, None]
+    N_fixed = S.T @ S + Pw.T @ Pw
+    g_fixed = S.T @ (st_y / st_sig) + Pw.T @ (p_y / p_sig)
+    N_all = W.T @ W
+    for iterations in range(1, max_iter + 1):  # noqa: B007
+        out = ~used
+        N = N_fixed + N_all - (W[out].T @ W[out] if out.any() else 0.0)
+        g = g_fixed + W.T @ np.where(used, (d - i_meas) / sig, 0.0)
+        x = _solve_normal(N, g)
+        if rows.size == 0:
+            break
+        pred = A_c @ x + i_meas
+        res = wrap_angle(y - pred)
+        d = pred + res  # re-wrap about the prediction
+        kept = res[used]
+        resid_std = 1.4826 * float(np.median(np.abs(kept - np.median(kept)))) if kept.size else np.inf
+        new_used = np.abs(res) <= np.maximum(4.0 * max(resid_std, 1e-4), 3.0 * sig)
+        if new_used.sum() < 3 or np.array_equal(new_used, used):
+            break
+        used = new_used
+    psi0, s = float(x[0]), float(x[1])
+    kb = x[2:]
+    yaw = psi0 + (1.0 + s) * integ - _bias_integral_rows(t, knots, kb)
+    bias = np.interp(t, knots, kb)
+    y_all = samples.course - (course_offset if course_offset is not None else 0.0)
+    res_all = wrap_angle(y_all - yaw[samples.rows])
+    bound = np.maximum(4.0 * max(resid_std if np.isfinite(resid_std) else 0.0, 1e-4), 3.0 * samples.sigma)
+    good = np.abs(res_all) <= bound
+    # report the offset in raw-gyro units: w_true = (1+s) w - b  ->  offset = b / (1+s)
+    return HeadingFit(
+        yaw=np.asarray(yaw, dtype=float),
+        gyro_bias=np.asarray(bias / (1.0 + s), dtype=float),
+        gyro_scale=1.0 + s,
+        yaw0=psi0,
+        knots_t=knots,
+        knots_bias=kb / (1.0 + s),
+        used=used,
+        good=good,
+        residual_std=resid_std,
+        iterations=iterations,
+    )

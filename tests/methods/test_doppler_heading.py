@@ -1,0 +1,138 @@
+"""Heading and gyro offset from Doppler course (seed 000's heading step): synthetic cases."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from sideslip.drive import Drive
+from sideslip.errors import InputError
+from sideslip.frames import wrap_angle
+from sideslip.methods.doppler_heading import (
+    CourseSamples,
+    check_yaw_rate_sign,
+    course_samples,
+    fit_heading,
+    hat_integrals,
+    knot_times,
+)
+from sideslip.methods.doppler_slip import doppler_slip
+from sideslip.models.dead_reckoning import _cumtrapz
+from sideslip.signals import vehicle_speed
+from sideslip.vehicle import load_vehicle
+from tests.methods.test_doppler_slip import VEHICLE, steady_drive
+
+DT = 0.01
+GNSS_EVERY = 10  # 10 Hz course
+
+
+def _turning_yaw(rng: np.random.Generator, duration: float = 600.0) -> tuple[np.ndarray, np.ndarray]:
+    """Time base and a true yaw rate: straights with 90 deg turns left and right."""
+    t = np.arange(0.0, duration, DT)
+    r = np.zeros_like(t)
+    for k, t0 in enumerate(np.arange(20.0, duration - 30.0, 40.0)):
+        sign = 1.0 if k % 3 != 2 else -1.0
+        r[(t >= t0) & (t < t0 + 10.0)] = sign * (np.pi / 2) / 10.0
+    return t, r
+
+
+def _samples(t: np.ndarray, course: np.ndarray, sigma: float) -> CourseSamples:
+    rows = np.arange(0, t.size, GNSS_EVERY)
+    return CourseSamples(rows, wrap_angle(course[rows]), np.full(rows.size, 15.0),
+                         np.full(rows.size, sigma))  # fmt: skip
+
+
+def test_hat_integrals_match_numerical_integration() -> None:
+    t = np.linspace(0.0, 250.0, 25001)
+    knots = knot_times(0.0, 250.0, 60.0)
+    values = np.array([0.3, -1.0, 2.0, 0.5, 1.5, -0.2])[: knots.size]
+    exact = hat_integrals(t, knots) @ values
+    numeric = _cumtrapz(t, np.interp(t, knots, values))
+    assert np.max(np.abs(exact - numeric)) < 1e-6
+
+
+def test_fit_recovers_offset_scale_and_heading_with_multipath() -> None:
+    rng = np.random.default_rng(1)
+    t, r = _turning_yaw(rng)
+    yaw_true = 0.7 + _cumtrapz(t, r)
+    bias, scale_err = 0.004, 0.01  # rad/s offset and 1 % gyro gain error
+    wz = (1.0 + scale_err) * r + bias + rng.standard_normal(t.size) * np.radians(0.1)
+    sigma = 0.05 / 15.0  # Doppler course 1-sigma, rad (0.05 m/s at 15 m/s)
+    course = yaw_true + rng.standard_normal(t.size) * sigma
+    samples = _samples(t, course, sigma)
+    # 2 % of the epochs are multipath: 5-30 deg off
+    hit = rng.random(samples.rows.size) < 0.02
+    bad = samples.course.copy()
+    bad[hit] += np.radians(rng.uniform(5.0, 30.0, hit.sum())) * rng.choice([-1, 1], hit.sum())
+    samples = CourseSamples(samples.rows, wrap_angle(bad), samples.speed, samples.sigma)
+    straight = np.abs(r[samples.rows]) < 1e-6
+    fit = fit_heading(t, wz, samples, straight)
+    # offset in raw-gyro units; course noise 0.2 deg over 600 s pins it to ~1e-5 rad/s
+    assert abs(np.mean(fit.gyro_bias) - bias) < 5e-5
+    assert abs(1.0 / fit.gyro_scale - (1.0 + scale_err)) < 1e-3
+    err = np.degrees(wrap_angle(fit.yaw - yaw_true))
+    # a tenth of the per-sample course noise (0.19 deg): hundreds of samples per knot
+    assert np.sqrt(np.mean(err**2)) < 0.05
+    # every multipath epoch on a straight is rejected, and few good ones
+    assert not fit.used[hit[straight]].any()
+    assert (~fit.used).sum() < 2 * hit[straight].sum() + 5
+
+
+def test_gnss_outage_holds_the_offset_and_standstill_keeps_the_heading() -> None:
+    rng = np.random.default_rng(2)
+    t, r = _turning_yaw(rng)
+    r[(t >= 300) & (t < 340)] = 0.0  # standstill from 300 s to 340 s
+    yaw_true = _cumtrapz(t, r)
+    bias = -0.003
+    wz = r + bias + rng.standard_normal(t.size) * np.radians(0.1)
+    sigma = 0.05 / 15.0
+    samples = _samples(t, yaw_true + rng.standard_normal(t.size) * sigma, sigma)
+    outage = (t[samples.rows] > 100.0) & (t[samples.rows] < 190.0)  # 90 s without GNSS
+    moving = ~((t[samples.rows] >= 300) & (t[samples.rows] < 340))
+    keep = ~outage & moving
+    sub = CourseSamples(samples.rows[keep], samples.course[keep], samples.speed[keep],
+                        samples.sigma[keep])  # fmt: skip
+    still = np.flatnonzero((t >= 300) & (t < 340))
+    fit = fit_heading(t, wz, sub, np.abs(r[sub.rows]) < 1e-6, still_rows=still, wz_raw=wz)
+    err = np.degrees(wrap_angle(fit.yaw - yaw_true))
+    # through the outage the heading drifts only with the offset's uncertainty and gyro noise:
+    # 0.1 deg/s white noise over 90 s at 100 Hz integrates to ~0.1 deg
+    assert np.max(np.abs(err[(t > 100) & (t < 190)])) < 0.3
+    # at standstill the heading does not move (offset from the gyro itself)
+    drift = np.degrees(fit.yaw[still[-1]] - fit.yaw[still[0]])
+    assert abs(drift) < 0.1
+    assert np.isfinite(fit.yaw).all() and np.isfinite(fit.gyro_bias).all()
+
+
+def test_no_gnss_gives_the_integrated_gyro() -> None:
+    t = np.arange(0.0, 10.0, DT)
+    empty = CourseSamples(np.zeros(0, dtype=np.intp), np.zeros(0), np.zeros(0), np.zeros(0))
+    fit = fit_heading(t, np.full(t.size, 0.1), empty, np.zeros(0, dtype=bool))
+    assert np.allclose(fit.yaw, 0.1 * t, atol=1e-6)
+    assert np.isinf(fit.residual_std)
+
+
+def test_yaw_rate_sign_agrees_on_a_good_drive() -> None:
+    drive = steady_drive()
+    samples = course_samples(drive, vehicle_speed(drive))
+    wz = np.nan_to_num(drive["wz"])
+    corr = check_yaw_rate_sign(drive.t, wz, samples, drive.path)
+    assert corr is not None and corr > 0.8
+
+
+def test_flipped_gyro_sign_fails_with_one_line_naming_wz() -> None:
+    drive = steady_drive()
+    flipped = Drive(drive.t, {**drive.data, "wz": -drive.data["wz"]}, drive.meta, "drive.csv")
+    with pytest.raises(InputError) as info:
+        doppler_slip(flipped, load_vehicle(VEHICLE))
+    message = str(info.value)
+    assert message.startswith("drive.csv: column 'wz': yaw rate turns opposite to the GNSS course")
+    assert "\n" not in message
+
+
+def test_sign_check_abstains_on_a_straight_drive() -> None:
+    t = np.arange(0.0, 60.0, DT)
+    rows = np.arange(0, t.size, GNSS_EVERY)
+    samples = CourseSamples(rows, np.full(rows.size, 0.3), np.full(rows.size, 15.0),
+                            np.full(rows.size, 0.003))  # fmt: skip
+    assert check_yaw_rate_sign(t, np.full(t.size, -0.001), samples, "x") is None

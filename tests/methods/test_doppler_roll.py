@@ -1,0 +1,138 @@
+"""Roll (eq 16) and the lateral-accelerometer error scan (eqs 17-19) of seed 000."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from sideslip.drive import Drive
+from sideslip.methods.doppler_roll import (
+    CurveWindow,
+    roll_from_lateral,
+    scan_ay_bias,
+)
+from sideslip.methods.doppler_slip import run_doppler_slip
+from sideslip.simulate.run import drive_from_truth
+from sideslip.simulate.sensors import SensorConfig
+from sideslip.vehicle import G, load_vehicle
+from tests.methods.test_doppler_slip import VEHICLE, steady_drive, steady_truth
+
+PAPER_DGY = 0.25  # m/s^2: the lateral-accelerometer error seed 000 identified on its MEMS IMU
+
+
+def test_roll_from_lateral_inverts_the_specific_force_exactly() -> None:
+    # the accelerometer of a body rolled by phi reads a_y cos(phi) + g sin(phi) + bias
+    phi = np.radians(np.array([-8.0, -2.0, 0.0, 3.0, 6.0]))
+    a_y = np.array([-4.0, 2.0, 0.0, 4.0, 6.0])
+    r, v = a_y / 15.0, np.full(5, 15.0)
+    reading = a_y * np.cos(phi) + G * np.sin(phi) + 0.2
+    assert np.allclose(roll_from_lateral(reading, r, v, ay_bias=0.2), phi, atol=1e-12)
+
+
+def test_roll_sign_is_iso_right_side_down_positive() -> None:
+    # standing on a road whose right edge is lower: a_y,m = +g sin(phi) > 0 -> roll > 0
+    assert roll_from_lateral(np.array([G * np.sin(0.05)]), np.zeros(1), np.zeros(1))[0] > 0
+
+
+def _with_extra_ay_error(drive: Drive, value: float) -> Drive:
+    return Drive(drive.t, {**drive.data, "ay": drive.data["ay"] + value}, drive.meta, drive.path)
+
+
+@pytest.mark.parametrize("extra", [0.0, PAPER_DGY, -0.4])
+def test_scan_finds_the_accelerometer_error_with_ideal_sensors(extra: float) -> None:
+    # ideal sensors on the analytic drive: only the scan's grid and the a_y ~ psi' V shortcut
+    # (v_y' dropped, 0.5 s smoothing) limit it; 0.02 m/s^2 is 0.12 deg of roll
+    vehicle = load_vehicle(VEHICLE)
+    drive = drive_from_truth(steady_truth(vehicle), vehicle, 0, SensorConfig.noiseless(), "x",
+                             VEHICLE)  # fmt: skip
+    est = run_doppler_slip(_with_extra_ay_error(drive, extra), vehicle)
+    assert est.params["dGy_mps2"] == pytest.approx(-extra, abs=0.02)
+    assert est.params["dGy_note"] == ""
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_scan_with_default_mems_sensors_beats_no_correction(seed: int) -> None:
+    # default sensors (gyro noise/bias walk/scale, Doppler 0.05 m/s, 0.2 % multipath) plus the
+    # paper's 0.25 m/s^2 error: the heading closure of ~10 curves is good to ~0.1 deg each,
+    # so delta G_y to ~0.05 m/s^2 (0.3 deg of roll), against 1.5 deg uncorrected
+    drive = _with_extra_ay_error(steady_drive(seed), PAPER_DGY)
+    vehicle = load_vehicle(VEHICLE)
+    est = run_doppler_slip(drive, vehicle)
+    truth_dgy = -(drive.meta["truth_sensor"]["accel_bias_mean"][1] + PAPER_DGY)
+    assert est.params["dGy_mps2"] == pytest.approx(truth_dgy, abs=0.06)
+    assert est.params["dGy_std_mps2"] < 0.1
+    moving = drive["ref_vx"] > 5.0
+    err = est["roll"][moving] - drive["ref_roll"][moving]
+    raw = est["roll_raw"][moving] - drive["ref_roll"][moving]  # delta G_y = 0
+    assert abs(np.mean(err)) < 0.5 * abs(np.mean(raw))
+    assert abs(np.degrees(np.mean(err))) < 0.4
+
+
+def _windows_and_signals(
+    phis: list[float], turn: float = np.pi / 2, closure_noise: list[float] | None = None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, list[CurveWindow]]:
+    """Synthetic curves at 15 m/s with body roll phi, gyro w_z = Omega cos(phi), a_y = 0."""
+    dt, dur = 0.01, 10.0
+    n_per = int(dur / dt) + 200
+    t = np.arange(len(phis) * n_per) * dt
+    rate = np.zeros(t.size)
+    ay_m = np.zeros(t.size)
+    windows = []
+    for k, phi in enumerate(phis):
+        a = k * n_per
+        sign = 1.0 if k % 2 == 0 else -1.0
+        seg = slice(a + 100, a + 100 + int(dur / dt))
+        omega = sign * turn / dur
+        rate[seg] = omega * np.cos(phi)
+        ay_m[seg] = G * np.sin(phi) * sign  # body rolls out of the turn
+        noise = closure_noise[k] if closure_noise else 0.0
+        windows.append(CurveWindow(a, a + n_per - 1, sign * turn + noise))
+    return t, rate, ay_m, np.zeros(t.size), windows
+
+
+def test_scan_on_synthetic_curves_and_the_combination_rules() -> None:
+    phis = [0.06, 0.09, 0.05, 0.08, 0.07]
+    t, rate, ay_m, cen, windows = _windows_and_signals(phis)
+    for combine in ("joint", "weighted_median", "median", "mean"):
+        res = scan_ay_bias(t, rate, ay_m, cen, windows, combine=combine)
+        assert res.ay_bias == pytest.approx(0.0, abs=0.015), combine
+    # an accelerometer error of 0.3 m/s^2 is found back
+    res = scan_ay_bias(t, rate, ay_m + 0.3, cen, windows)
+    assert res.ay_bias == pytest.approx(0.3, abs=0.015)
+    assert res.params()["dGy_mps2"] == pytest.approx(-0.3, abs=0.015)
+    with pytest.raises(ValueError, match="combine must be one of"):
+        scan_ay_bias(t, rate, ay_m, cen, windows, combine="mode")
+
+
+def test_one_bad_curve_is_dropped_by_the_joint_fit() -> None:
+    phis = [0.06, 0.09, 0.05, 0.08, 0.07, 0.06]
+    noise = [0.0, 0.0, 0.0, np.radians(1.5), 0.0, 0.0]  # one curve's end hit by multipath
+    t, rate, ay_m, cen, windows = _windows_and_signals(phis, closure_noise=noise)
+    res = scan_ay_bias(t, rate, ay_m + 0.2, cen, windows)
+    assert res.n_curves == 5
+    assert res.ay_bias == pytest.approx(0.2, abs=0.03)
+
+
+def test_flat_curves_carry_no_roll_information_and_the_correction_is_not_applied() -> None:
+    # roll 0.5 deg: d(turn)/d(delta) ~ turn phi / g is 1.6e-3 rad per m/s^2, below the noise
+    phis = [0.009, 0.008, 0.009, 0.008, 0.009, 0.008]
+    noise = list(np.radians([0.1, 0.1, -0.1, -0.1, 0.1, -0.1]))  # not a scale factor
+    t, rate, ay_m, cen, windows = _windows_and_signals(phis, closure_noise=noise)
+    res = scan_ay_bias(t, rate, ay_m, cen, windows)
+    assert res.ay_bias == 0.0
+    assert "too uncertain" in res.reason
+
+
+def test_too_few_curves_give_zero_and_say_why() -> None:
+    # three curves cannot pin delta G_y and the residual gyro scale with any redundancy
+    t, rate, ay_m, cen, windows = _windows_and_signals([0.06, 0.09, 0.05])
+    res = scan_ay_bias(t, rate, ay_m + 0.3, cen, windows)
+    assert res.ay_bias == 0.0
+    assert "only 3 usable curves" in res.reason
+
+
+def test_no_curves_gives_zero_and_says_why() -> None:
+    t = np.arange(0.0, 10.0, 0.01)
+    res = scan_ay_bias(t, np.zeros(t.size), np.zeros(t.size), np.zeros(t.size), [])
+    assert res.ay_bias == 0.0 and res.n_curves == 0
+    assert "no curve window" in res.reason
