@@ -1,0 +1,216 @@
+"""Seed 001 reproduction: kkf vs mkf vs mkf_adaptive, accuracy, Table I, speed vs FilterPy.
+
+Run:  .venv/bin/python benchmarks/kalman_gps_accuracy.py [--quick]
+Writes benchmarks/results/kalman_gps_accuracy.md.
+
+* Accuracy: beta RMSE / max error (deg, above the evaluation speed gate, from
+  ``sideslip.evaluate.metrics``) of the three methods on the paper's two scenarios (several
+  seeds; the right vehicle file and one with cornering stiffness 30 % low) and on other
+  scenarios (seed 0), plus the residual diagnostics of the MKF.
+* The paper's findings: KKF error at the end of each turn (gyro scale factor); bank-unaware vs
+  bank-given MKF error in the 8 deg banked turn.
+* Table I: steady-state 1-sigma from the discrete Riccati equation at 30 m/s, 5/20/50/100 Hz.
+* Speed: samples per second of each method and of FilterPy's KalmanFilter running the same MKF
+  on the same drive in this run (best of 3, after a warm-up run).
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime as dt
+import platform
+import time
+from pathlib import Path
+
+import numpy as np
+
+from sideslip.drive import Drive
+from sideslip.evaluate import metrics
+from sideslip.methods import kalman_gps as kg
+from sideslip.simulate import simulate
+from sideslip.vehicle import Vehicle, load_vehicle
+
+ROOT = Path(__file__).resolve().parents[1]
+OUT = ROOT / "benchmarks" / "results" / "kalman_gps_accuracy.md"
+PAPER_SCENARIOS = ("two_turns_gyro_sf", "banked_track_turn")
+OTHER_SCENARIOS = ("step_steer", "urban_course", "suburban_outages", "race_lap")
+SEEDS = (0, 1, 2)
+METHODS = {"kkf": kg.kkf, "mkf": kg.mkf, "mkf_adaptive": kg.mkf_adaptive}
+
+
+def _row(drive: Drive, vehicle: Vehicle, name: str) -> dict[str, float]:
+    est = METHODS[name](drive, vehicle)
+    m = metrics(drive, est.series)
+    out = {"rmse": m["beta_rmse_deg"], "max": m["beta_max_err_deg"]}
+    res = est.params.get("residuals", {})
+    out["verdict"] = "ok" if res.get("verdict") == "consistent" else ("mismatch" if "verdict" in res else "-")
+    for ch in ("gyro", "course"):
+        if ch in res:
+            out[f"{ch}_colour"] = res[ch]["colour"]
+            out[f"{ch}_nis"] = res[ch]["nis_mean"]
+    return out
+
+
+def accuracy(scenarios: tuple[str, ...], seeds: tuple[int, ...]) -> list[str]:
+    lines = [
+        "| scenario | seed | vehicle file | method | beta RMSE (deg) | beta max err (deg) "
+        "| gyro resid. colour | gyro NIS | course resid. colour | course NIS | residual verdict |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for sc in scenarios:
+        for seed in seeds:
+            d = simulate(sc, seed=seed)
+            veh = load_vehicle(d.meta["vehicle"])
+            for label, v in (("right", veh), ("cf,cr -30 %", veh.with_changes(cf=0.7 * veh.cf, cr=0.7 * veh.cr))):
+                for name in METHODS:
+                    r = _row(d, v, name)
+                    lines.append(
+                        f"| {sc} | {seed} | {label} | {name} | {r['rmse']:.3f} | {r['max']:.3f} | "
+                        f"{r.get('gyro_colour', float('nan')):.3f} | {r.get('gyro_nis', float('nan')):.3f} | "
+                        f"{r.get('course_colour', float('nan')):.3f} | {r.get('course_nis', float('nan')):.3f} | {r['verdict']} |"
+                    )
+    return lines
+
+
+def findings() -> list[str]:
+    lines = []
+    d = simulate("two_turns_gyro_sf", seed=0)
+    veh = load_vehicle("blazer_suv")
+    sf = d.meta["truth_sensor"]["gyro_scale_factor"]
+    turning = np.abs(d["ref_r"]) > 0.1
+    edges = np.flatnonzero(np.diff(turning.astype(int)))
+    errs = {n: np.degrees(METHODS[n](d, veh)["beta"] - d["ref_beta"]) for n in ("kkf", "mkf")}
+    lines.append(f"two_turns_gyro_sf seed 0, gyro scale factor {sf:+.4f}:")
+    lines.append("")
+    lines.append("| turn | KKF mean abs err, first 1/5 (deg) | KKF last 1/5 (deg) | MKF max abs err in turn (deg) |")
+    lines.append("|---|---|---|---|")
+    for i, (a, b) in enumerate(zip(edges[::2], edges[1::2], strict=False)):
+        n = b - a
+        k = np.abs(errs["kkf"])
+        lines.append(
+            f"| {i + 1} | {k[a : a + n // 5].mean():.2f} | {k[b - n // 5 : b].mean():.2f} | "
+            f"{np.abs(errs['mkf'][a:b]).max():.3f} |"
+        )
+    wrong = kg.mkf(d, load_vehicle("seed003_sedan"))
+    right = kg.mkf(d, veh)
+    lines.append("")
+    lines.append(
+        "Wrong vehicle file (seed003_sedan for the Blazer): MKF beta RMSE "
+        f"{metrics(d, wrong.series)['beta_rmse_deg']:.3f} deg vs {metrics(d, right.series)['beta_rmse_deg']:.3f}; "
+        f"gyro residual colour {wrong.params['residuals']['gyro']['colour']:.2f} vs "
+        f"{right.params['residuals']['gyro']['colour']:.2f}, gyro NIS "
+        f"{wrong.params['residuals']['gyro']['nis_mean']:.3f} vs {right.params['residuals']['gyro']['nis_mean']:.3f}."
+    )
+    b = simulate("banked_track_turn", seed=0)
+    turning = np.abs(b["ref_r"]) > 0.1
+    e0 = np.degrees(kg.run_mkf(b, veh)["beta"] - b["ref_beta"])[turning]
+    e1 = np.degrees(kg.run_mkf(b, veh, bank=b["ref_bank"])["beta"] - b["ref_beta"])[turning]
+    lines.append("")
+    lines.append(
+        f"banked_track_turn seed 0 (bank {np.degrees(b['ref_bank'][turning]).mean():.1f} deg in the turn): "
+        f"bank-unaware MKF mean beta error in the turn {e0.mean():+.3f} deg; with the bank given "
+        f"as known input {e1.mean():+.3f} deg."
+    )
+    return lines
+
+
+def table_one_lines() -> list[str]:
+    veh = load_vehicle("blazer_suv")
+    lines = [
+        "| rate (Hz) | sigma gyro (deg/s) | sigma course (deg) | ours sigma_beta (deg) | ours sigma_r (deg/s) "
+        "| ours sigma_psi (deg) | paper sigma_beta_hat | paper sigma_r_hat |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for r in kg.table_one(veh):
+        p = kg.TABLE_I_PAPER[r["rate_hz"]]
+        lines.append(
+            f"| {r['rate_hz']:g} | {r['sigma_gyro_deg_s']:.4f} | {r['sigma_course_deg']:.4f} | "
+            f"{r['sigma_beta_deg']:.4f} | {r['sigma_r_deg_s']:.4f} | {r['sigma_yaw_deg']:.4f} | {p[0]} | {p[1]} |"
+        )
+    return lines
+
+
+def _best_of(fn, n: int = 3) -> float:  # type: ignore[no-untyped-def]
+    fn()
+    best = float("inf")
+    for _ in range(n):
+        t0 = time.perf_counter()
+        fn()
+        best = min(best, time.perf_counter() - t0)
+    return best
+
+
+def speed_lines(quick: bool) -> list[str]:
+    d = simulate("suburban_outages", seed=0)
+    veh = load_vehicle(d.meta["vehicle"])
+    n = len(d)
+    lines = [f"Drive: suburban_outages seed 0, {n} rows ({d.t[-1] - d.t[0]:.0f} s at 100 Hz).", ""]
+    lines += ["| method | samples/s |", "|---|---|"]
+    rates = {}
+    for name, fn in METHODS.items():
+        rates[name] = n / _best_of(lambda fn=fn: fn(d, veh))
+        lines.append(f"| {name} | {rates[name]:,.0f} |")
+    try:
+        from sideslip.peers import filterpy_kf
+    except ImportError:
+        lines.append("| filterpy (peer) | not installed |")
+        return lines
+    peer = n / _best_of(lambda: filterpy_kf.run(d, veh), 1 if quick else 2)
+    diff = np.max(np.abs(filterpy_kf.run(d, veh) - kg.mkf(d, veh)["beta"]))
+    lines.append(f"| filterpy KalmanFilter, same MKF (peer) | {peer:,.0f} |")
+    lines.append("")
+    lines.append(f"mkf / filterpy speed ratio: {rates['mkf'] / peer:.1f}x; max |beta difference| {diff:.2e} rad.")
+    return lines
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--quick", action="store_true", help="seed 0 only")
+    args = ap.parse_args()
+    seeds = (0,) if args.quick else SEEDS
+    t0 = time.time()
+    parts = [
+        "# Seed 001 reproduction: KKF / MKF / adaptive MKF",
+        "",
+        f"Generated by `benchmarks/kalman_gps_accuracy.py` on {dt.datetime.now(dt.UTC):%Y-%m-%d %H:%M} UTC "
+        f"({platform.processor() or platform.machine()}, Python {platform.python_version()}). "
+        f"Seeds {list(seeds)} for {', '.join(PAPER_SCENARIOS)}; seed 0 for the others.",
+        "Errors above the evaluation speed gate (sideslip.evaluate.metrics). Residual colour: sum of the",
+        "squared autocorrelations of the normalised innovations over 20 lags (~0.004 for white noise at",
+        "5000 samples); NIS: mean squared normalised innovation (1 = consistent; the default gyro noise,",
+        "0.3 deg/s, is above the simulator's, hence NIS << 1 on the gyro channel).",
+        "",
+        "## Beta accuracy, the paper's scenarios",
+        "",
+        *accuracy(PAPER_SCENARIOS, seeds),
+        "",
+        "## Beta accuracy, other scenarios",
+        "",
+        *accuracy(OTHER_SCENARIOS, (0,)),
+        "",
+        "## The paper's findings",
+        "",
+        *findings(),
+        "",
+        "## Table I (steady-state 1-sigma from the DARE, V = 30 m/s, noise ~ sqrt(rate))",
+        "",
+        "Sensor noise at 100 Hz taken from the paper's 100 Hz row (gyro 0.3 deg/s, course 0.0382 deg), our",
+        "process noise (module constants). The paper's estimation errors grow as sqrt(rate) like its noise;",
+        "with a fixed-density process noise (Van Loan Q_d) ours shrink with rate: the paper's Q_d must have",
+        "been scaled per sample. sigma_r_hat agrees within 2-5 % at 20-100 Hz.",
+        "",
+        *table_one_lines(),
+        "",
+        "## Speed",
+        "",
+        *speed_lines(args.quick),
+        "",
+        f"Total run time {time.time() - t0:.0f} s.",
+        "",
+    ]
+    OUT.write_text("\n".join(parts))
+    print("\n".join(parts))
+
+
+if __name__ == "__main__":
+    main()
