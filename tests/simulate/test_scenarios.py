@@ -30,8 +30,18 @@ def test_the_scenario_list_is_complete() -> None:
     assert set(SCENARIOS) == {
         "step_steer", "slalom_low_mu", "banked_turn", "dlc_bank", "two_turns_gyro_sf",
         "banked_track_turn", "urban_course", "urban_highway", "race_lap", "suburban_outages",
-        "demo",
+        "demo", "endurance",
     }  # fmt: skip
+
+
+def test_endurance_runs_for_a_requested_duration_on_mixed_roads() -> None:
+    """The benchmark's drive: its length is a parameter; two minutes of it already hold town
+    driving (a stop at the start), curves and both signs of crossfall."""
+    truth, _ = run_scenario_full("endurance", 0, duration_s=120.0)
+    assert truth.t[-1] == pytest.approx(120.0)
+    assert np.isfinite(truth.vx).all()
+    assert np.max(_speed_kmh(truth)) > 35.0
+    assert np.max(np.abs(truth.r)) > 0.05
 
 
 @pytest.mark.parametrize("name", sorted(SCENARIOS))
