@@ -279,9 +279,7 @@ def report_cmd(
     except ImportError:
         raise CommandUnavailable("the HTML report is not available in this build yet") from None
     from sideslip.drive import load_drive
-    from sideslip.estimate import load_estimates
-
-    from sideslip.estimate import params_path
+    from sideslip.estimate import load_estimates, params_path
 
     if out.suffix.lower() not in (".html", ".htm"):
         raise InputError(str(out), "expected an output path ending in .html")
@@ -371,8 +369,9 @@ def demo_cmd(
         console.print(f"estimates: {est_path}; metrics: {out_dir / (scenario + '_metrics.json')}")
     else:
         report = out_dir / f"{scenario}_report.html"
-        write_report(drive, {"": {"t": drive.t}, **series}, report,
-                     {e.method: dict(e.params) for e in estimates})
+        write_report(
+            drive, {"": {"t": drive.t}, **series}, report, {e.method: dict(e.params) for e in estimates}
+        )
         console.print(f"report: {report}")
     console.print(f"done in {time.perf_counter() - start:.1f} s")
 

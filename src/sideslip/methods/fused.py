@@ -101,7 +101,7 @@ class FusedNoise:
 
 
 @numba.njit(cache=True)
-def _scalar_update(x, P, h, y, rvar, ph):  # type: ignore[no-untyped-def]
+def _scalar_update(x, P, h, y, rvar, ph):
     """Kalman update with one scalar measurement row ``h`` (innovation ``y``, variance
     ``rvar``); ``ph`` is a work buffer.  Sequential scalar updates are exact for a diagonal R
     and need no matrix inverse."""
@@ -123,7 +123,7 @@ def _scalar_update(x, P, h, y, rvar, ph):  # type: ignore[no-untyped-def]
 
 
 @numba.njit(cache=True)
-def _block_update(x, P, h0, h1, y0, y1, rvar, gate, ph0, ph1, xb):  # type: ignore[no-untyped-def]
+def _block_update(x, P, h0, h1, y0, y1, rvar, gate, ph0, ph1, xb):
     """Two-row update with R = rvar I, robust to outliers; returns True when not down-weighted.
 
     The squared Mahalanobis distance d2 of the innovation is computed on the 2x2 block; beyond
@@ -164,7 +164,7 @@ def _block_update(x, P, h0, h1, y0, y1, rvar, gate, ph0, ph1, xb):  # type: igno
 
 
 @numba.njit(cache=True)
-def _attitude(x, fy, k_phi):  # type: ignore[no-untyped-def]
+def _attitude(x, fy, k_phi):
     """Body roll (bank from c_y plus suspension roll k_phi f_y) and pitch from c_x, rad."""
     sb = min(max(x[ICY] / G, -0.6), 0.6)
     sp = min(max(-x[ICX] / G, -0.6), 0.6)
@@ -172,7 +172,7 @@ def _attitude(x, fy, k_phi):  # type: ignore[no-untyped-def]
 
 
 @numba.njit(cache=True)
-def _yaw_rate(x, wz, wy, fy, k_phi):  # type: ignore[no-untyped-def]
+def _yaw_rate(x, wz, wy, fy, k_phi):
     """Heading rate psi' = (w_y sin(roll) + w_z cos(roll)) / cos(pitch) (seed 000 eq 3) with the
     z gyro corrected for bias and scale factor; returns (psi', d/db_g, d/ds_g)."""
     roll, pitch = _attitude(x, fy, k_phi)
@@ -204,7 +204,7 @@ _F_ROWS = np.array(
 
 
 @numba.njit(cache=True)
-def _predict(x, P, xn, Pn, F, tmp, dt, wz, wy, fy, ax, ay, q, k_phi, accel_vrw, gyro_arw, gm_tau):  # type: ignore[no-untyped-def]
+def _predict(x, P, xn, Pn, F, tmp, dt, wz, wy, fy, ax, ay, q, k_phi, accel_vrw, gyro_arw, gm_tau):
     """One Euler step of the process model into ``xn``, ``Pn`` (and its Jacobian ``F``).
 
     F P F' uses the sparsity of F (at most 5 non-zeros a row): O(NX^2), no allocation.
@@ -271,9 +271,29 @@ def _predict(x, P, xn, Pn, F, tmp, dt, wz, wy, fy, ax, ay, q, k_phi, accel_vrw, 
 
 
 @numba.njit(cache=True)
-def _run(  # type: ignore[no-untyped-def]
-    t, wz, wx, wy, ax, ay, fy_lp, vw, ve, vn, vstd, ge, gn, pstd, x0, P0, q, lever, lr, k_phi,
-    noise, smooth,
+def _run(
+    t,
+    wz,
+    wx,
+    wy,
+    ax,
+    ay,
+    fy_lp,
+    vw,
+    ve,
+    vn,
+    vstd,
+    ge,
+    gn,
+    pstd,
+    x0,
+    P0,
+    q,
+    lever,
+    lr,
+    k_phi,
+    noise,
+    smooth,
 ):
     """Forward EKF over all rows, then (``smooth``) the RTS backward pass.
 
@@ -303,8 +323,25 @@ def _run(  # type: ignore[no-untyped-def]
     lx, ly, lz = lever[0], lever[1], lever[2]
     for k in range(n):
         if k > 0:
-            _predict(x, P, xn, Pn, F, tmp, t[k] - t[k - 1], wz[k - 1], wy[k - 1], fy_lp[k - 1],
-                     ax[k - 1], ay[k - 1], q, k_phi, accel_vrw, gyro_arw, gm_tau)
+            _predict(
+                x,
+                P,
+                xn,
+                Pn,
+                F,
+                tmp,
+                t[k] - t[k - 1],
+                wz[k - 1],
+                wy[k - 1],
+                fy_lp[k - 1],
+                ax[k - 1],
+                ay[k - 1],
+                q,
+                k_phi,
+                accel_vrw,
+                gyro_arw,
+                gm_tau,
+            )
             x[:] = xn
             P[:, :] = Pn
         r, dr_db, dr_ds = _yaw_rate(x, wz[k], wy[k], fy_lp[k], k_phi)
@@ -399,8 +436,25 @@ def _run(  # type: ignore[no-untyped-def]
         D = np.zeros((NX, NX))
         dx = np.zeros(NX)
         for k in range(n - 2, -1, -1):
-            _predict(xs[k], Ps[k], xn, Pn, F, tmp, t[k + 1] - t[k], wz[k], wy[k], fy_lp[k], ax[k],
-                     ay[k], q, k_phi, accel_vrw, gyro_arw, gm_tau)
+            _predict(
+                xs[k],
+                Ps[k],
+                xn,
+                Pn,
+                F,
+                tmp,
+                t[k + 1] - t[k],
+                wz[k],
+                wy[k],
+                fy_lp[k],
+                ax[k],
+                ay[k],
+                q,
+                k_phi,
+                accel_vrw,
+                gyro_arw,
+                gm_tau,
+            )
             # smoother gain C = P_k F' Pn^{-1}: solve Pn C' = F P_k by Cholesky (Pn is SPD)
             _cholesky(Pn, L)
             for i in range(NX):  # B = F P_k (sparse rows of F)
@@ -441,7 +495,7 @@ def _run(  # type: ignore[no-untyped-def]
 
 
 @numba.njit(cache=True)
-def _cholesky(A, L):  # type: ignore[no-untyped-def]
+def _cholesky(A, L):
     """Lower Cholesky factor of the SPD matrix A into L (jitter-guarded)."""
     n = A.shape[0]
     L[:, :] = 0.0
@@ -458,7 +512,7 @@ def _cholesky(A, L):  # type: ignore[no-untyped-def]
 
 
 @numba.njit(cache=True)
-def _cho_solve(L, B):  # type: ignore[no-untyped-def]
+def _cho_solve(L, B):
     """Solve (L L') X = B in place of B (all columns)."""
     n = L.shape[0]
     for c in range(B.shape[1]):
@@ -475,7 +529,7 @@ def _cho_solve(L, B):  # type: ignore[no-untyped-def]
 
 
 @numba.njit(cache=True)
-def _low_pass(t, x, tau):  # type: ignore[no-untyped-def]
+def _low_pass(t, x, tau):
     """Causal first-order low-pass with time constant ``tau`` (s)."""
     y = np.empty_like(x)
     y[0] = x[0]
@@ -502,8 +556,7 @@ def _initial_state(drive: Drive, vehicle: Vehicle, vw: NDArray) -> tuple[NDArray
         k_prior = 0.005
     x0[IK] = k_prior
     # gyro bias prior 0.1 rad/s (5.7 deg/s): raw phone gyros carry several deg/s (comma2k19: 3.9)
-    sig = [10.0, 10.0, math.radians(10.0), 1.0, 0.5, 0.1, 0.5, 0.5, 0.02, 0.6 * k_prior, 0.02,
-           1.5, 1.5]
+    sig = [10.0, 10.0, math.radians(10.0), 1.0, 0.5, 0.1, 0.5, 0.5, 0.02, 0.6 * k_prior, 0.02, 1.5, 1.5]
     P0[np.arange(NX), np.arange(NX)] = np.square(sig)
     return x0, P0, k_prior
 
@@ -563,12 +616,45 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, noise: FusedNoise | None 
     lever = np.array(vehicle.gnss_xyz, dtype=float)  # antenna from the CG, vehicle axes
     lr = vehicle.lr
     k_phi = _roll_gain(vehicle)
-    params = np.array([nz.wheel_sigma, nz.slip_sigma, nz.slip_rel, nz.gate_chi2,
-                       nz.standstill_speed, nz.accel_vrw, nz.gyro_arw, nz.k_curve_accel,
-                       nz.gyro_noise, nz.gnss_gm_tau_s])
+    params = np.array(
+        [
+            nz.wheel_sigma,
+            nz.slip_sigma,
+            nz.slip_rel,
+            nz.gate_chi2,
+            nz.standstill_speed,
+            nz.accel_vrw,
+            nz.gyro_arw,
+            nz.k_curve_accel,
+            nz.gyro_noise,
+            nz.gnss_gm_tau_s,
+        ]
+    )
     fy_lp = _low_pass(t, ay * (1.0 - G * _roll_gain(vehicle)), nz.force_tau_s)
-    xs, Ps, acc, rej = _run(t, wz, wx, wy, ax, ay, fy_lp, vw, ve, vn, vstd, ge, gn, pstd, x0, P0, q, lever, lr,
-                            k_phi, params, smooth)
+    xs, Ps, acc, rej = _run(
+        t,
+        wz,
+        wx,
+        wy,
+        ax,
+        ay,
+        fy_lp,
+        vw,
+        ve,
+        vn,
+        vstd,
+        ge,
+        gn,
+        pstd,
+        x0,
+        P0,
+        q,
+        lever,
+        lr,
+        k_phi,
+        params,
+        smooth,
+    )
     vx, vy = xs[:, IVX], xs[:, IVY]
     speed2 = np.maximum(vx**2 + vy**2, 1e-6)
     beta = np.arctan2(vy, np.maximum(np.abs(vx), 1e-3))

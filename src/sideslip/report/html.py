@@ -15,7 +15,7 @@ import plotly.graph_objects as go
 from plotly.offline import get_plotlyjs
 
 from sideslip.drive import Drive, _atomic_write
-from sideslip.evaluate import METRIC_NAMES, evaluate_all, forward_speed, SPEED_GATE
+from sideslip.evaluate import METRIC_NAMES, SPEED_GATE, evaluate_all, forward_speed
 from sideslip.frames import wrap_angle
 
 MAX_POINTS = 4000  # per trace: keeps the file small and the page responsive
@@ -103,12 +103,16 @@ def _map_plot(drive: Drive, est: Series) -> go.Figure | None:
     fig.update_yaxes(scaleanchor="x", scaleratio=1)
     s = _stride(len(drive))
     if has_ref:
-        fig.add_scatter(x=drive["ref_e"][s], y=drive["ref_n"][s], name="reference", line={"color": "black", "width": 3})
+        fig.add_scatter(
+            x=drive["ref_e"][s], y=drive["ref_n"][s], name="reference", line={"color": "black", "width": 3}
+        )
     if has_gnss:
         ok = np.isfinite(drive["gnss_e"])
         ge, gn = drive["gnss_e"][ok], drive["gnss_n"][ok]
         gs = _stride(ge.size)
-        fig.add_scatter(x=ge[gs], y=gn[gs], mode="markers", name="GNSS fixes", marker={"size": 3, "color": "#999"})
+        fig.add_scatter(
+            x=ge[gs], y=gn[gs], mode="markers", name="GNSS fixes", marker={"size": 3, "color": "#999"}
+        )
     for i, m in enumerate(methods):
         fig.add_scatter(x=est[m]["e"][s], y=est[m]["n"][s], name=m, line={"color": _colour(i), "width": 1.5})
     return fig
@@ -125,14 +129,21 @@ def _speed_plot(drive: Drive) -> go.Figure:
         if rows.size > 1:
             gaps = np.flatnonzero(np.diff(drive.t[rows]) > 5 * np.median(np.diff(drive.t[rows])))
             for g in gaps:
-                fig.add_vrect(x0=drive.t[rows[g]], x1=drive.t[rows[g + 1]], fillcolor="red", opacity=0.12,
-                              line_width=0, annotation_text="GNSS gap", annotation_position="top left")
+                fig.add_vrect(
+                    x0=drive.t[rows[g]],
+                    x1=drive.t[rows[g + 1]],
+                    fillcolor="red",
+                    opacity=0.12,
+                    line_width=0,
+                    annotation_text="GNSS gap",
+                    annotation_position="top left",
+                )
     return fig
 
 
 def _coverage(drive: Drive, est: Series) -> list[tuple[str, float, float, int]]:
     """(method, share of |beta error| within 1 sigma, within 2 sigma, samples)."""
-    out = []
+    out: list[tuple[str, float, float, int]] = []
     if "ref_beta" not in drive:
         return out
     gate = forward_speed(drive) > SPEED_GATE
@@ -197,26 +208,49 @@ def render_report(
     scenario = meta.get("scenario") or meta.get("source") or Path(drive.path).name
     title = title or f"sideslip report — {scenario}"
     methods = [m for m in est if m]
-    sensors = [c for c in ("ax", "ay", "az", "wx", "wy", "wz", "v_fl", "v_fr", "v_rl", "v_rr", "v_can", "steer",
-                           "gnss_e", "gnss_ve") if c in drive]
+    sensors = [
+        c
+        for c in (
+            "ax",
+            "ay",
+            "az",
+            "wx",
+            "wy",
+            "wz",
+            "v_fl",
+            "v_fr",
+            "v_rl",
+            "v_rr",
+            "v_can",
+            "steer",
+            "gnss_e",
+            "gnss_ve",
+        )
+        if c in drive
+    ]
     parts = [
         f"<h1>{html.escape(title)}</h1>",
-        f'<p class="sub">{len(drive):,} rows, {duration:.1f} s; vehicle {html.escape(str(meta.get("vehicle", "?")))}; '
-        f"sensors: {html.escape(', '.join(sensors))}; methods: {html.escape(', '.join(methods))}.</p>",
+        f'<p class="sub">{len(drive):,} rows, {duration:.1f} s; '
+        f"vehicle {html.escape(str(meta.get('vehicle', '?')))}; "
+        f"sensors: {html.escape(', '.join(sensors))}; "
+        f"methods: {html.escape(', '.join(methods))}.</p>",
         '<div class="card"><h2>Metrics</h2>',
-        f"<p>Errors against the reference on rows faster than {SPEED_GATE:g} m/s; best in each column in green.</p>",
+        f"<p>Errors against the reference on rows faster than {SPEED_GATE:g} m/s; "
+        "best in each column in green.</p>",
         _metrics_html(results),
         "</div>",
     ]
     cov = _coverage(drive, est)
     if cov:
         rows = "".join(
-            f"<tr><th>{html.escape(m)}</th><td>{a:.1%}</td><td>{b:.1%}</td><td>{n:,}</td></tr>" for m, a, b, n in cov
+            f"<tr><th>{html.escape(m)}</th><td>{a:.1%}</td><td>{b:.1%}</td><td>{n:,}</td></tr>"
+            for m, a, b, n in cov
         )
         parts.append(
             '<div class="card"><h2>Uncertainty calibration</h2><p>Share of sideslip errors inside the '
             "method's own 1σ and 2σ (a calibrated Gaussian estimate gives 68.3 % and 95.4 %).</p>"
-            f"<table><tr><th>method</th><th>|e| &lt; 1σ</th><th>|e| &lt; 2σ</th><th>samples</th></tr>{rows}</table></div>"
+            "<table><tr><th>method</th><th>|e| &lt; 1σ</th><th>|e| &lt; 2σ</th><th>samples</th></tr>"
+            f"{rows}</table></div>"
         )
     figs = [
         _time_plot(drive, est, "beta", "ref_beta", "Sideslip angle β", "deg", math.degrees(1)),
@@ -243,9 +277,7 @@ def render_report(
     )
 
 
-def write_report(
-    drive: Drive, est: Series, out: str | Path, params: Mapping[str, Any] | None = None
-) -> None:
+def write_report(drive: Drive, est: Series, out: str | Path, params: Mapping[str, Any] | None = None) -> None:
     """Write the report atomically to ``out`` (HTML)."""
     text = render_report(drive, est, params)
     _atomic_write(Path(out), lambda tmp: tmp.write_text(text, encoding="utf-8"))

@@ -483,9 +483,12 @@ def _urban_outages() -> tuple[tuple[float, float], ...]:
 ENDURANCE_LENGTH_M = 110_000.0  # enough road for 1.5 h at the route's average speed
 
 
-def _endurance_blocks(rng: np.random.Generator) -> list[tuple[float, float, float, float, float, float, float]]:
+Block = tuple[float, float, float, float, float, float, float]
+
+
+def _endurance_blocks(rng: np.random.Generator) -> list[Block]:
     """Random blocks (as in _URBAN) until the route is long enough: town, country, highway."""
-    blocks = []
+    blocks: list[Block] = []
     total = 0.0
     while total < ENDURANCE_LENGTH_M:
         kind = rng.choice(3, p=(0.3, 0.4, 0.3))
