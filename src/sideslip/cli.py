@@ -212,18 +212,40 @@ def _check_same_time_base(drive: Any, est: dict[str, Any], est_path: Path) -> No
         )
 
 
-def metrics_table(results: dict[str, dict[str, float]], title: str) -> Table:
-    """A rich table of method -> metric values (the contract's metric names as columns)."""
-    from sideslip.evaluate import METRIC_NAMES
+TERMINAL_METRICS = (
+    ("beta_rmse_deg", "β RMSE °"),
+    ("beta_max_err_deg", "β max °"),
+    ("roll_rmse_deg", "roll RMSE °"),
+    ("yaw_rmse_deg", "yaw RMSE °"),
+    ("pos_rmse_m", "pos RMSE m"),
+    ("xtrack_100m_p95_m", "xtrack p95 m"),
+)
 
-    names = [m for m in METRIC_NAMES if any(m in r for r in results.values())]
-    extra = sorted({k for r in results.values() for k in r} - set(METRIC_NAMES))
+
+def metrics_table(results: dict[str, dict[str, float]], title: str) -> Table:
+    """A compact rich table of the headline metrics, methods sorted by beta RMSE.
+
+    Every metric (the contract's and the extra ones) goes to the JSON and the report; the
+    terminal shows the six that fit a normal terminal width.
+    """
+    cols = [(k, label) for k, label in TERMINAL_METRICS if any(k in r for r in results.values())]
     table = Table(title=title)
     table.add_column("method", no_wrap=True)
-    for name in names + extra:
-        table.add_column(name.replace("_", " "), justify="right", overflow="fold")
-    for method, vals in results.items():
-        table.add_row(method, *[f"{vals[k]:.3f}" if k in vals else "-" for k in names + extra])
+    for _, label in cols:
+        table.add_column(label, justify="right", no_wrap=True)
+    order = sorted(results, key=lambda m: results[m].get("beta_rmse_deg", float("inf")))
+    best = {k: min((abs(r[k]) for r in results.values() if k in r), default=None) for k, _ in cols}
+    for method in order:
+        vals = results[method]
+        cells = []
+        for k, _ in cols:
+            if k not in vals:
+                cells.append("-")
+            elif best[k] is not None and abs(vals[k]) == best[k] and len(results) > 1:
+                cells.append(f"[bold green]{vals[k]:.3f}[/]")
+            else:
+                cells.append(f"{vals[k]:.3f}")
+        table.add_row(method, *cells)
     return table
 
 

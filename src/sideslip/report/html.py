@@ -18,7 +18,7 @@ from sideslip.drive import Drive, _atomic_write
 from sideslip.evaluate import METRIC_NAMES, SPEED_GATE, evaluate_all, forward_speed
 from sideslip.frames import wrap_angle
 
-MAX_POINTS = 4000  # per trace: keeps the file small and the page responsive
+MAX_POINTS = 2500  # per trace: keeps the file small and the page responsive
 PALETTE = (
     "#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2", "#7f7f7f",
     "#bcbd22", "#17becf", "#393b79", "#637939", "#8c6d31", "#843c39", "#7b4173", "#3182bd",
@@ -49,38 +49,84 @@ def _colour(i: int) -> str:
     return PALETTE[i % len(PALETTE)]
 
 
+SHOWN = 5  # methods drawn by default (the best by beta RMSE); the others: click the legend
+
+
+def _visible(rank: int) -> bool | str:
+    return True if rank < SHOWN else "legendonly"
+
+
+def _robust_range(values: list[np.ndarray], pad: float) -> list[float] | None:
+    """A y-range holding the bulk of the shown curves, so that one drifting method (the
+    open-loop baseline) does not flatten the others; zoom out to see all."""
+    finite = [v[np.isfinite(v)] for v in values]
+    finite = [v for v in finite if v.size]
+    if not finite:
+        return None
+    lo = float(np.median([np.percentile(v, 0.5) for v in finite]))
+    hi = float(np.median([np.percentile(v, 99.5) for v in finite]))
+    span = max(hi - lo, pad)
+    return [lo - 0.25 * span, hi + 0.25 * span]
+
+
 def _time_plot(
-    drive: Drive, est: Series, key: str, ref: str | None, title: str, unit: str, scale: float
+    drive: Drive,
+    est: Series,
+    order: list[str],
+    key: str,
+    ref: str | None,
+    title: str,
+    scale: float,
 ) -> go.Figure | None:
-    methods = [m for m in est if m and key in est[m]]
+    methods = [m for m in order if key in est[m]]
     if not methods:
         return None
-    fig = _figure(title, unit)
+    fig = _figure(title, "deg")
     s = _stride(len(drive))
     t = drive.t[s]
+    shown = []
     if ref and ref in drive:
-        fig.add_scatter(x=t, y=drive[ref][s] * scale, name="reference", line={"color": "black", "width": 3})
+        y_ref = drive[ref][s] * scale
+        fig.add_scatter(x=t, y=y_ref, name="reference", line={"color": "black", "width": 3})
+        shown.append(y_ref)
     for i, m in enumerate(methods):
-        fig.add_scatter(x=t, y=est[m][key][s] * scale, name=m, line={"color": _colour(i), "width": 1.5})
+        y = est[m][key][s] * scale
+        fig.add_scatter(
+            x=t, y=y, name=m, line={"color": _colour(i), "width": 1.5}, visible=_visible(i)
+        )
+        if i < SHOWN:
+            shown.append(y)
+    rng = _robust_range(shown, 0.5)
+    if rng:
+        fig.update_yaxes(range=rng)
     return fig
 
 
-def _error_plot(drive: Drive, est: Series, key: str, ref: str, title: str) -> go.Figure | None:
-    methods = [m for m in est if m and key in est[m]]
+def _error_plot(
+    drive: Drive, est: Series, order: list[str], key: str, ref: str, title: str
+) -> go.Figure | None:
+    methods = [m for m in order if key in est[m]]
     if not methods or ref not in drive:
         return None
     fig = _figure(title, "error (deg)")
     s = _stride(len(drive))
+    t = drive.t[s]
     gate = forward_speed(drive) > SPEED_GATE
+    shown = []
     for i, m in enumerate(methods):
         err = np.degrees(wrap_angle(est[m][key] - drive[ref]))
-        err = np.where(gate, err, np.nan)
-        fig.add_scatter(x=drive.t[s], y=err[s], name=m, line={"color": _colour(i), "width": 1.2})
+        err = np.where(gate, err, np.nan)[s]
+        fig.add_scatter(
+            x=t, y=err, name=m, line={"color": _colour(i), "width": 1.2},
+            visible=_visible(i), legendgroup=m,
+        )  # fmt: skip
+        if i < SHOWN:
+            shown.append(err)
         std = est[m].get(f"{key}_std")
         if std is not None:
             band = 2 * np.degrees(std[s])
             fig.add_scatter(
-                x=np.concatenate([drive.t[s], drive.t[s][::-1]]),
+                x=np.concatenate([t, t[::-1]]),
                 y=np.concatenate([band, -band[::-1]]),
                 fill="toself",
                 fillcolor=_colour(i),
@@ -88,12 +134,18 @@ def _error_plot(drive: Drive, est: Series, key: str, ref: str, title: str) -> go
                 line={"width": 0},
                 name=f"{m} ±2σ",
                 hoverinfo="skip",
+                visible=_visible(i),
+                legendgroup=m,
+                showlegend=False,
             )
+    rng = _robust_range(shown, 0.2)
+    if rng:
+        fig.update_yaxes(range=rng)
     return fig
 
 
-def _map_plot(drive: Drive, est: Series) -> go.Figure | None:
-    methods = [m for m in est if m and "e" in est[m] and "n" in est[m]]
+def _map_plot(drive: Drive, est: Series, order: list[str]) -> go.Figure | None:
+    methods = [m for m in order if "e" in est[m] and "n" in est[m]]
     has_ref = "ref_e" in drive and "ref_n" in drive
     has_gnss = "gnss_e" in drive and "gnss_n" in drive
     if not (methods or has_ref or has_gnss):
@@ -104,17 +156,22 @@ def _map_plot(drive: Drive, est: Series) -> go.Figure | None:
     s = _stride(len(drive))
     if has_ref:
         fig.add_scatter(
-            x=drive["ref_e"][s], y=drive["ref_n"][s], name="reference", line={"color": "black", "width": 3}
-        )
+            x=drive["ref_e"][s], y=drive["ref_n"][s], name="reference",
+            line={"color": "black", "width": 3},
+        )  # fmt: skip
     if has_gnss:
         ok = np.isfinite(drive["gnss_e"])
         ge, gn = drive["gnss_e"][ok], drive["gnss_n"][ok]
         gs = _stride(ge.size)
         fig.add_scatter(
-            x=ge[gs], y=gn[gs], mode="markers", name="GNSS fixes", marker={"size": 3, "color": "#999"}
-        )
+            x=ge[gs], y=gn[gs], mode="markers", name="GNSS fixes",
+            marker={"size": 3, "color": "#999"},
+        )  # fmt: skip
     for i, m in enumerate(methods):
-        fig.add_scatter(x=est[m]["e"][s], y=est[m]["n"][s], name=m, line={"color": _colour(i), "width": 1.5})
+        fig.add_scatter(
+            x=est[m]["e"][s], y=est[m]["n"][s], name=m,
+            line={"color": _colour(i), "width": 1.5}, visible=_visible(i),
+        )  # fmt: skip
     return fig
 
 
@@ -171,7 +228,9 @@ def _metrics_html(results: dict[str, dict[str, float]]) -> str:
             best[c] = min(vals)
     head = "".join(f"<th>{html.escape(c)}</th>" for c in cols)
     body = []
-    for m, r in results.items():
+    order = sorted(results, key=lambda m: results[m].get("beta_rmse_deg", math.inf))
+    for m in order:
+        r = results[m]
         cells = []
         for c in cols:
             if c not in r:
@@ -208,6 +267,14 @@ def render_report(
     scenario = meta.get("scenario") or meta.get("source") or Path(drive.path).name
     title = title or f"sideslip report — {scenario}"
     methods = [m for m in est if m]
+    # plots list methods best first (beta RMSE, else roll RMSE), the rest keep their order
+    order = sorted(
+        methods,
+        key=lambda m: (
+            results.get(m, {}).get("beta_rmse_deg", math.inf),
+            results.get(m, {}).get("roll_rmse_deg", math.inf),
+        ),
+    )
     sensors = [
         c
         for c in (
@@ -252,15 +319,21 @@ def render_report(
             "<table><tr><th>method</th><th>|e| &lt; 1σ</th><th>|e| &lt; 2σ</th><th>samples</th></tr>"
             f"{rows}</table></div>"
         )
+    deg = math.degrees(1.0)
+    beta_err = "Sideslip error (±2σ band where the method gives one)"
     figs = [
-        _time_plot(drive, est, "beta", "ref_beta", "Sideslip angle β", "deg", math.degrees(1)),
-        _error_plot(drive, est, "beta", "ref_beta", "Sideslip error (with ±2σ where the method gives one)"),
-        _time_plot(drive, est, "roll", "ref_roll", "Roll angle (body to horizontal)", "deg", math.degrees(1)),
-        _time_plot(drive, est, "bank", "ref_bank", "Road bank angle", "deg", math.degrees(1)),
-        _error_plot(drive, est, "yaw", "ref_yaw", "Yaw (heading) error"),
-        _map_plot(drive, est),
+        _time_plot(drive, est, order, "beta", "ref_beta", "Sideslip angle β", deg),
+        _error_plot(drive, est, order, "beta", "ref_beta", beta_err),
+        _time_plot(drive, est, order, "roll", "ref_roll", "Roll angle (body to horizontal)", deg),
+        _time_plot(drive, est, order, "bank", "ref_bank", "Road bank angle", deg),
+        _error_plot(drive, est, order, "yaw", "ref_yaw", "Yaw (heading) error"),
+        _map_plot(drive, est, order),
         _speed_plot(drive),
     ]
+    parts.append(
+        f"<p>Plots show the {SHOWN} most accurate methods; click a name in a legend to show "
+        "or hide any other.  Double-click a plot to zoom out to every curve.</p>"
+    )
     for fig in figs:
         if fig is not None:
             parts.append(fig.to_html(full_html=False, include_plotlyjs=False, config={"responsive": True}))
