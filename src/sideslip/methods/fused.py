@@ -204,6 +204,20 @@ _F_ROWS = np.array(
 
 
 @numba.njit(cache=True)
+def _f_times(F, P, out):
+    """out = F P using the sparse rows of F listed in _F_ROWS (no allocation)."""
+    for i in range(NX):
+        for j in range(NX):
+            acc = 0.0
+            for m in range(6):
+                col = _F_ROWS[i, m]
+                if col < 0:
+                    break
+                acc += F[i, col] * P[col, j]
+            out[i, j] = acc
+
+
+@numba.njit(cache=True)
 def _predict(x, P, xn, Pn, F, tmp, dt, wz, wy, fy, ax, ay, q, k_phi, accel_vrw, gyro_arw, gm_tau):
     """One Euler step of the process model into ``xn``, ``Pn`` (and its Jacobian ``F``).
 
@@ -242,16 +256,7 @@ def _predict(x, P, xn, Pn, F, tmp, dt, wz, wy, fy, ax, ay, q, k_phi, accel_vrw, 
     xn[IPSI] += dt * r
     xn[IVX] += dt * (ax - x[ICX] + r * vy)
     xn[IVY] += dt * (ay * (1.0 - G * k_phi) - x[ICY] - r * vx)
-    # tmp = F P
-    for i in range(NX):
-        for j in range(NX):
-            acc = 0.0
-            for m in range(6):
-                col = _F_ROWS[i, m]
-                if col < 0:
-                    break
-                acc += F[i, col] * P[col, j]
-            tmp[i, j] = acc
+    _f_times(F, P, tmp)  # tmp = F P
     # Pn = tmp F'
     for i in range(NX):
         for j in range(NX):
@@ -457,15 +462,7 @@ def _run(
             )
             # smoother gain C = P_k F' Pn^{-1}: solve Pn C' = F P_k by Cholesky (Pn is SPD)
             _cholesky(Pn, L)
-            for i in range(NX):  # B = F P_k (sparse rows of F)
-                for j in range(NX):
-                    acc = 0.0
-                    for m in range(6):
-                        col = _F_ROWS[i, m]
-                        if col < 0:
-                            break
-                        acc += F[i, col] * Ps[k, col, j]
-                    B[i, j] = acc
+            _f_times(F, Ps[k], B)  # B = F P_k
             _cho_solve(L, B)  # B <- C'
             for i in range(NX):
                 dx[i] = xs[k + 1, i] - xn[i]

@@ -14,7 +14,7 @@ import numpy as np
 import plotly.graph_objects as go
 from plotly.offline import get_plotlyjs
 
-from sideslip.drive import Drive, _atomic_write
+from sideslip.drive import COLUMNS, Drive, _atomic_write
 from sideslip.evaluate import METRIC_NAMES, SPEED_GATE, evaluate_all, forward_speed
 from sideslip.frames import wrap_angle
 
@@ -275,26 +275,7 @@ def render_report(
             results.get(m, {}).get("roll_rmse_deg", math.inf),
         ),
     )
-    sensors = [
-        c
-        for c in (
-            "ax",
-            "ay",
-            "az",
-            "wx",
-            "wy",
-            "wz",
-            "v_fl",
-            "v_fr",
-            "v_rl",
-            "v_rr",
-            "v_can",
-            "steer",
-            "gnss_e",
-            "gnss_ve",
-        )
-        if c in drive
-    ]
+    sensors = [c for c in COLUMNS if c != "t" and not c.startswith("ref_") and c in drive]
     parts = [
         f"<h1>{html.escape(title)}</h1>",
         f'<p class="sub">{len(drive):,} rows, {duration:.1f} s; '
