@@ -151,6 +151,9 @@ def run_bench(
         "methods": rows,
     }
     _print(console, result)
+    if methods:
+        console.print("partial run (--method): results printed, benchmarks/results/ left as it is")
+        return result
     RESULTS.mkdir(parents=True, exist_ok=True)
     (RESULTS / "bench.json").write_text(json.dumps(result, indent=2))
     (RESULTS / "bench.md").write_text(_markdown(result))

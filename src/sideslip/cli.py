@@ -33,8 +33,13 @@ class CommandUnavailable(Exception):
     """A command whose substance has not landed: says what is missing, exits non-zero."""
 
 
+def say(line: str) -> None:
+    """One plain line on stderr, never wrapped (errors must stay one line at any width)."""
+    err_console.print(line, markup=False, highlight=False, soft_wrap=True)
+
+
 def _fail(message: str, code: int = 2) -> None:
-    err_console.print(f"error: {message}", markup=False, highlight=False, soft_wrap=True)
+    say(f"error: {message}")
     raise typer.Exit(code)
 
 
@@ -149,14 +154,12 @@ def run_methods(drive: Any, vehicle: Any, names: list[str] | None, quiet: bool =
             if names:
                 run_method(m, drive, vehicle)  # raises the precise one-line error
             if not quiet:
-                err_console.print(f"skipped {m.name}: {reason}", markup=False, highlight=False)
+                say(f"skipped {m.name}: {reason}")
             continue
         start = time.perf_counter()
         est = run_method(m, drive, vehicle)
         if not quiet:
-            err_console.print(
-                f"ran {m.name} ({time.perf_counter() - start:.2f} s)", markup=False, highlight=False
-            )
+            say(f"ran {m.name} ({time.perf_counter() - start:.2f} s)")
         estimates.append(est)
     if not estimates:
         raise InputError(drive.path, "no method can run on this drive (see the skipped reasons above)")
@@ -355,6 +358,71 @@ def convert_cmd(
     console.print(f"wrote {out}: {len(drive)} rows, {drive.t[-1] - drive.t[0]:.1f} s")
 
 
+@app.command("batch")
+@guarded
+def batch_cmd(
+    drives: Annotated[list[Path], typer.Argument(metavar="DRIVE...", help="Drive tables (many).")],
+    vehicle: Annotated[str, typer.Option("--vehicle", help="Vehicle preset name or TOML path.")],
+    out_dir: Annotated[Path, typer.Option("--out-dir", help="Folder for estimates and summary.")],
+    method: Annotated[
+        list[str] | None, typer.Option("--method", help="Method to run (repeatable; default all possible).")
+    ] = None,
+    workers: Annotated[int, typer.Option("--workers", help="Worker processes (default: CPUs).")] = 0,
+    use_dask: Annotated[
+        bool, typer.Option("--dask", help="Run on a local Dask cluster (extra 'fleet').")
+    ] = False,
+) -> None:
+    """Estimate (and evaluate) many drives in parallel; write a summary table.
+
+    A drive that fails validation is listed with its one-line error; the others go on.  Exits 1
+    when any drive failed.
+    """
+    import os
+
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+    from sideslip.batch import run_batch
+    from sideslip.methods.registry import all_methods
+    from sideslip.vehicle import load_vehicle
+
+    load_vehicle(vehicle)  # a bad vehicle file fails once, here, not in every worker
+    registry = all_methods()
+    for name in method or []:
+        if name not in registry:
+            raise InputError("--method", f"unknown method '{name}': expected one of {', '.join(registry)}")
+    if use_dask:
+        import importlib.util
+
+        if importlib.util.find_spec("distributed") is None:
+            raise InputError("--dask", "dask.distributed is not installed: pip install 'sideslip[fleet]'")
+    n_workers = workers if workers > 0 else min(len(drives), os.cpu_count() or 1)
+    start = time.perf_counter()
+    failed: list[str] = []
+    with Progress(
+        TextColumn("[progress.description]{task.description}"), BarColumn(), MofNCompleteColumn(),
+        TimeElapsedColumn(), console=err_console,
+    ) as progress:  # fmt: skip
+        task = progress.add_task("drives", total=len(drives))
+
+        def tick(res: Any) -> None:
+            if res.error:
+                failed.append(res.error)
+            progress.advance(task)
+
+        results = run_batch([str(d) for d in drives], vehicle, out_dir, method, n_workers, use_dask, tick)
+    rows = sum(r.rows for r in results)
+    elapsed = time.perf_counter() - start
+    console.print(
+        f"{len(results) - len(failed)} of {len(results)} drives done, {rows:,} rows in "
+        f"{elapsed:.1f} s ({rows / max(elapsed, 1e-9):,.0f} rows/s with {n_workers} workers); "
+        f"summary: {out_dir / 'summary.csv'}"
+    )
+    for line in failed:
+        say(f"error: {line}")
+    if failed:
+        raise typer.Exit(1)
+
+
 @app.command("demo")
 @guarded
 def demo_cmd(
@@ -407,11 +475,7 @@ def main() -> None:
     except Exception as exc:
         if _STATE["debug"] or "--debug" in sys.argv:
             raise
-        err_console.print(
-            f"error: internal error {type(exc).__name__}: {exc} (re-run with --debug for a traceback)",
-            markup=False,
-            highlight=False,
-        )
+        say(f"error: internal error {type(exc).__name__}: {exc} (re-run with --debug for a traceback)")
         sys.exit(1)
 
 

@@ -308,7 +308,10 @@ def _run(
     """
     n = t.size
     xs = np.zeros((n, NX))
-    Ps = np.zeros((n, NX, NX))
+    # the smoother needs every filtered covariance; the filter keeps only what it outputs
+    Ps = np.zeros((n if smooth else 1, NX, NX))
+    var = np.zeros((n, NX))
+    cov_vxvy = np.zeros(n)
     x = x0.copy()
     P = P0.copy()
     xn = np.zeros(NX)
@@ -434,7 +437,11 @@ def _run(
                 P[i, j] = v
                 P[j, i] = v
         xs[k] = x
-        Ps[k] = P
+        if smooth:
+            Ps[k] = P
+        for i in range(NX):
+            var[k, i] = P[i, i]
+        cov_vxvy[k] = P[IVX, IVY]
     if smooth:
         L = np.zeros((NX, NX))
         B = np.zeros((NX, NX))
@@ -488,7 +495,11 @@ def _run(
                     Ps[k, i, j] += acc
                     if j != i:
                         Ps[k, j, i] = Ps[k, i, j]
-    return xs, Ps, accepted, rejected
+        for k in range(n):
+            for i in range(NX):
+                var[k, i] = Ps[k, i, i]
+            cov_vxvy[k] = Ps[k, IVX, IVY]
+    return xs, var, cov_vxvy, accepted, rejected
 
 
 @numba.njit(cache=True)
@@ -628,7 +639,7 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, noise: FusedNoise | None 
         ]
     )
     fy_lp = _low_pass(t, ay * (1.0 - G * _roll_gain(vehicle)), nz.force_tau_s)
-    xs, Ps, acc, rej = _run(
+    xs, var, cov_vxvy, acc, rej = _run(
         t,
         wz,
         wx,
@@ -659,14 +670,14 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, noise: FusedNoise | None 
     beta = np.where(moving, beta, 0.0)
     # beta = atan2(v_y, v_x): gradient [-v_y, v_x] / |v|^2
     jx, jy = -vy / speed2, vx / speed2
-    var_b = jx**2 * Ps[:, IVX, IVX] + jy**2 * Ps[:, IVY, IVY] + 2 * jx * jy * Ps[:, IVX, IVY]
+    var_b = jx**2 * var[:, IVX] + jy**2 * var[:, IVY] + 2 * jx * jy * cov_vxvy
     beta_std = np.where(moving, np.sqrt(np.maximum(var_b, 0.0)), math.radians(5.0))
     beta_std = np.minimum(beta_std, math.radians(30.0))
     bank = np.arcsin(np.clip(xs[:, ICY] / G, -0.6, 0.6))
     roll = bank + k_phi * fy_lp
     pitch = np.arcsin(np.clip(-xs[:, ICX] / G, -0.6, 0.6))
     r = ((wz - xs[:, IBG]) * (1.0 - xs[:, ISG]) * np.cos(roll) + wy * np.sin(roll)) / np.cos(pitch)
-    sd = np.sqrt(np.maximum(np.diagonal(Ps, axis1=1, axis2=2), 0.0))
+    sd = np.sqrt(np.maximum(var, 0.0))
     series = {
         "beta": beta,
         "beta_std": beta_std,
