@@ -45,9 +45,10 @@ from benchmarks import realdata_check as rc  # noqa: E402
 
 # Known failures on this minute, found by this check; strict so the test says when fixed.
 KNOWN_HEADING_FAILURES = {
-    "kkf": "the straight-driving detector thresholds (0.57 deg/s) see the raw gyro before any "
-    "bias is estimated; with a 3.9 deg/s bias it never detects straight driving, so the bias "
-    "stays 0 and the heading drifts (117 deg RMSE)",
+    "kkf": "the causal KKF starts from a 1 deg/s bias prior and needs about 10 s of straight "
+    "driving to learn this raw gyro's 3.9 deg/s bias (it then matches Android's to 0.03 deg/s "
+    "and holds the heading within 0.3 deg); the transient makes the minute's heading RMSE "
+    "3.8 deg, above the 1 deg bound",
 }
 OUTAGE_DISTANCE_FRACTION = 0.05
 

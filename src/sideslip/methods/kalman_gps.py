@@ -119,6 +119,9 @@ SIGMA_BETA0 = math.radians(2.0)
 SIGMA_R0 = 0.05
 SIGMA_PSI0 = math.radians(20.0)
 SIGMA_BIAS0 = math.radians(1.0)
+# the gyro's own straightness test is trusted once the bias 1-sigma is below a third of the
+# 'on' threshold; before that (e.g. a raw phone gyro) the GNSS course rate decides
+BIAS_KNOWN_VAR = (0.01 / 3.0) ** 2
 
 # ---- KKF -----------------------------------------------------------------------------------
 STRAIGHT_ON = 0.01  # rad/s (0.57 deg/s): enter straight below this |yaw rate| and |course rate|
@@ -725,7 +728,7 @@ def _kkf_loop(
     course: NDArray,
     course_var: NDArray, course_rate: NDArray, speed: NDArray, zero_rate: NDArray,
     x0: NDArray, P0: NDArray, q_bias: float, on: float, off: float, hold_s: float,
-    v_gate: float, sigma_beta_straight: float,
+    v_gate: float, sigma_beta_straight: float, bias_known_var: float,
 ) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray]:  # fmt: skip
     """KKF with state [psi, b_gyro, s_gyro] (s = scale factor; P0[2,2] = 0 freezes it at 0).
 
@@ -774,6 +777,12 @@ def _kkf_loop(
         dt_k = t[k] - t[k - 1] if k > 0 else 0.0
         yaw_dev = wz_mean[k] - x[1] - x[2] * wz_mean[k]
         yaw_dev_fast = wz_fast[k] - x[1] - x[2] * wz_fast[k]
+        if P[1, 1] > bias_known_var:
+            # bias not learned yet: a raw gyro (phones carry several deg/s of bias) would never
+            # look straight.  Steady straightness is then judged by the GNSS course rate alone,
+            # and turn onsets by the bias-free change of the gyro (0.1 s mean minus 1 s mean).
+            yaw_dev = 0.0
+            yaw_dev_fast = wz_fast[k] - wz_mean[k]
         st, on_time = _straight_step(
             st, on_time, yaw_dev, yaw_dev_fast, course_rate[k], speed[k], dt_k, on, off,
             hold_s, v_gate,
@@ -828,6 +837,7 @@ def run_kkf(
     xs, pd, straight, innov, S = _kkf_loop(
         t, wz, wz_mean, wz_fast, _gyro_variance(t), course, cm.sigma**2, crate, speed, zero_rate,
         x0, P0, Q_BIAS, STRAIGHT_ON, STRAIGHT_OFF, STRAIGHT_HOLD_S, V_GATE, SIGMA_BETA_STRAIGHT,
+        BIAS_KNOWN_VAR,
     )  # fmt: skip
     fresh = np.isfinite(course)
     beta_f = np.where(fresh, wrap_angle(np.nan_to_num(course) - xs[:, 0]), np.nan)
