@@ -32,6 +32,8 @@ Measurements:
                      gyro: a roof antenna 1.3 m up sees roll rate x 1.3 m, as large as v_y)
     GNSS position    [e, n] at the antenna + [p_e, p_n]  (innovation-gated against multipath)
     slip relation    0 = v_y - l_r r + K f_y v_x + noise (seed 000 eqs 5-14: rear-axle slip
+                     [noise adapted on-line: inflated while its normalised innovations exceed
+                     1, i.e. where the tyres leave their linear range]
                      beta_r = (v_y - l_r r)/v_x = -K f_y, with f_y = a_y,m (1 - g k_phi) the
                      tyre lateral force per mass: the accelerometer reading less the suspension
                      roll's gravity term, so road bank is included as seed 000 eq 14 asks.
@@ -77,7 +79,7 @@ class FusedNoise:
     """Noise settings (1-sigma), SI units; defaults for MEMS IMU, automotive wheel speeds and a
     u-blox M8-class receiver.  ``*_psd`` are continuous random-walk densities per sqrt(s)."""
 
-    accel_vrw: float = 0.05  # m/s/sqrt(s): velocity random walk (accelerometer noise, vibration,
+    accel_vrw: float = 0.1  # m/s/sqrt(s): velocity random walk (accelerometer noise, vibration,
     #                            unmodelled roll transients)
     gyro_arw: float = 5e-4  # rad/sqrt(s): angle random walk (consumer MEMS: 1e-4 to 5e-4)
     gyro_noise: float = 0.003  # rad/s per sample: for the standstill yaw-rate update
@@ -98,13 +100,14 @@ class FusedNoise:
     standstill_speed: float = 0.05  # m/s: wheels slower than this stand still
     force_tau_s: float = 0.15  # s: low-pass of the lateral force in the slip relation
     k_curve_accel: float = 1.0  # m/s^2: K is learned only where |f_y| exceeds this
+    adapt_tau_s: float = 1.0  # s: time constant of the slip relation's adaptive noise
 
 
 @numba.njit(cache=True)
 def _scalar_update(x, P, h, y, rvar, ph):
     """Kalman update with one scalar measurement row ``h`` (innovation ``y``, variance
     ``rvar``); ``ph`` is a work buffer.  Sequential scalar updates are exact for a diagonal R
-    and need no matrix inverse."""
+    and need no matrix inverse.  Returns the normalised innovation squared y^2 / S."""
     n = x.size
     for i in range(n):
         acc = 0.0
@@ -120,6 +123,7 @@ def _scalar_update(x, P, h, y, rvar, ph):
         gi = ph[i] / s
         for j in range(n):
             P[i, j] -= gi * ph[j]
+    return y * y / s
 
 
 @numba.njit(cache=True)
@@ -325,7 +329,9 @@ def _run(
     xb = np.zeros(NX)
     wheel_sigma, slip_sigma, slip_rel, gate, still = noise[0], noise[1], noise[2], noise[3], noise[4]
     accel_vrw, gyro_arw, k_curve = noise[5], noise[6], noise[7]
-    gyro_noise, gm_tau = noise[8], noise[9]
+    gyro_noise, gm_tau, adapt_tau = noise[8], noise[9], noise[10]
+    slip_infl = 1.0
+    t_slip = -1e308
     accepted = 0
     rejected = 0
     lx, ly, lz = lever[0], lever[1], lever[2]
@@ -388,7 +394,13 @@ def _run(
                 if abs(fy) > k_curve:
                     h0[IK] = fy * vx
                 sig = slip_sigma + slip_rel * abs(x[IK] * fy * vx)
-                _scalar_update(x, P, h0, -hval, sig * sig, ph0)
+                nis = _scalar_update(x, P, h0, -hval, sig * sig * slip_infl, ph0)
+                # adaptive noise: where the linear-tyre relation disagrees with the rest of
+                # the data (tyres near the friction limit), its variance grows until the
+                # normalised innovations average 1 again (time constant adapt_tau seconds)
+                a = min(1.0, (t[k] - t_slip) / adapt_tau) if t_slip > -1e300 else 0.0
+                slip_infl = min(max(slip_infl * math.exp(a * (min(nis, 25.0) - 1.0)), 1.0), 400.0)
+                t_slip = t[k]
         # ---- GNSS Doppler velocity at the antenna
         if math.isfinite(ve[k]) and math.isfinite(vn[k]):
             r, dr_db, dr_ds = _yaw_rate(x, wz[k], wy[k], fy_lp[k], k_phi)
@@ -636,6 +648,7 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, noise: FusedNoise | None 
             nz.k_curve_accel,
             nz.gyro_noise,
             nz.gnss_gm_tau_s,
+            nz.adapt_tau_s,
         ]
     )
     fy_lp = _low_pass(t, ay * (1.0 - G * _roll_gain(vehicle)), nz.force_tau_s)
