@@ -116,3 +116,33 @@ def test_tseng_gains_finite_at_standstill_and_neutral_steer() -> None:
         assert np.isfinite(arr).all()
     s = sin_roll_from_r(np.array([0.3, 0.0, -0.3]), np.zeros(3), gains)
     assert np.all(np.abs(s) <= 1.0)
+
+
+def test_missing_roll_inertia_and_damping_fall_back_to_typical_dynamics() -> None:
+    """Users' files often lack roll inertia/damping: the steady state (eq 43, from m, h, k)
+    is unchanged, the transient uses a 1.5 Hz, 0.5-damped roll mode, and the methods run."""
+    import math
+
+    from sideslip.drive import drive_from_columns
+    from sideslip.methods.registry import all_methods, why_not
+    from sideslip.models.roll import roll_dynamics, suspension_roll, suspension_roll_steady
+    from sideslip.vehicle import load_vehicle
+
+    full = load_vehicle("seed003_sedan")
+    rough = full.with_changes(roll_inertia=math.nan, roll_damping=math.nan)
+    inertia, damping, assumed = roll_dynamics(rough)
+    assert assumed and not roll_dynamics(full)[2]
+    k_eff = rough.roll_stiffness - rough.mass * 9.80665 * (rough.cg_height - rough.roll_axis_height)
+    assert math.sqrt(k_eff / inertia) / (2 * math.pi) == pytest.approx(1.5)
+    assert damping / (2 * math.sqrt(k_eff * inertia)) == pytest.approx(0.5)
+    t = np.arange(0, 5, 0.01)
+    ay = np.where(t > 1.0, 4.0, 0.0)
+    phi = suspension_roll(t, ay, rough)
+    assert np.isfinite(phi).all()
+    # settles to the same steady state as the full file's model (eq 41 with k, m, h)
+    assert phi[-1] == pytest.approx(suspension_roll(t, ay, full)[-1], rel=0.02)
+    # eq 41 as written has no gravity moment, so it settles exactly on eq 43: m h a_y / k
+    assert phi[-1] == pytest.approx(float(suspension_roll_steady(4.0, rough)), rel=0.02)
+    drive = drive_from_columns({"t": t, "wz": 0 * t, "ay": ay, "steer": 0 * t, "v_can": 20 + 0 * t})
+    for name in ("roll_index", "obs_modified", "obs_kinematic"):
+        assert why_not(all_methods()[name], drive, rough) is None

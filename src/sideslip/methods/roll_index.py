@@ -77,6 +77,7 @@ from sideslip.models.roll import (
     dynamic_factor,
     sin_roll_from_ay,
     sin_roll_from_r,
+    roll_dynamics,
     suspension_roll,
     tseng_gains,
 )
@@ -106,9 +107,10 @@ KUS_REL_TOL = 0.3  # relative error of the understeer gradient (tyre stiffness 3
 GYRO_BIAS_TOL = 0.2 * DEG  # rad/s: typical MEMS gyro turn-on bias
 STANDSTILL_MIN_S = 0.5  # s of standstill before its gyro mean is used as the gyro bias
 
+# roll inertia and damping are used when given, typical values otherwise (models.roll)
 ROLL_PARAMS = (
     "mass", "lf", "lr", "cf", "cr", "cg_height", "roll_axis_height", "roll_stiffness",
-    "roll_damping", "roll_inertia", "steering_ratio",
+    "steering_ratio",
 )  # fmt: skip
 
 
@@ -362,6 +364,7 @@ def roll_index(drive: Drive, vehicle: Vehicle) -> Estimate:
             "roll_cutoff_hz": ROLL_CUTOFF_HZ,
             "flag_cutoff_hz": FLAG_CUTOFF_HZ,
             "understeer_gradient": vehicle.understeer_gradient,
+            "roll_dynamics_assumed": roll_dynamics(vehicle)[2],
         },
     )
 

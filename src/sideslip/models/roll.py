@@ -82,16 +82,41 @@ def _roll_oscillator(t: NDArray, force: NDArray, inertia: float, damping: float,
     return out
 
 
+TYPICAL_ROLL_FREQUENCY_HZ = 1.5  # passenger cars: body roll natural frequency 1.2-2 Hz
+TYPICAL_ROLL_DAMPING_RATIO = 0.5  # passenger cars: 0.3-0.7
+
+
+def roll_dynamics(vehicle: Vehicle) -> tuple[float, float, bool]:
+    """(roll inertia kg m^2, roll damping N m s/rad, assumed) for eq 41.
+
+    Users' vehicle files often give the roll stiffness (it sets the steady state, eq 43) but
+    not the roll inertia or damping.  Where the file lacks them, typical passenger-car roll
+    dynamics are assumed (natural frequency 1.5 Hz, damping ratio 0.5 on the effective
+    stiffness k - m g h), and ``assumed`` is True so that methods can say so.
+    """
+    inertia, damping = vehicle.roll_inertia, vehicle.roll_damping
+    assumed = not (np.isfinite(inertia) and np.isfinite(damping))
+    k_eff = vehicle.roll_stiffness - vehicle.mass * G * roll_arm(vehicle)
+    if k_eff <= 0.0:
+        k_eff = vehicle.roll_stiffness
+    if not np.isfinite(inertia):
+        inertia = k_eff / (2.0 * np.pi * TYPICAL_ROLL_FREQUENCY_HZ) ** 2
+    if not np.isfinite(damping):
+        damping = 2.0 * TYPICAL_ROLL_DAMPING_RATIO * float(np.sqrt(k_eff * inertia))
+    return float(inertia), float(damping), assumed
+
+
 def suspension_roll(t: ArrayLike, ay_m: ArrayLike, vehicle: Vehicle) -> FloatArray:
     """Eq 41: suspension roll (rad) of the sprung mass driven by the measured a_ym (m/s^2).
 
     ``I_r phi'' = m h a_ym - d phi' - k phi`` integrated with the trapezoidal rule on the
-    time base ``t`` (s), starting at the steady state of the first sample (eq 43).
+    time base ``t`` (s), starting at the steady state of the first sample (eq 43).  Roll
+    inertia and damping missing from the vehicle file: see :func:`roll_dynamics`.
     """
     tt = np.asarray(t, dtype=float)
     force = vehicle.mass * roll_arm(vehicle) * np.asarray(ay_m, dtype=float)
-    return _roll_oscillator(tt, force, vehicle.roll_inertia, vehicle.roll_damping,
-                            vehicle.roll_stiffness)
+    inertia, damping, _ = roll_dynamics(vehicle)
+    return _roll_oscillator(tt, force, inertia, damping, vehicle.roll_stiffness)
 
 
 def static_bank(ay_m: ArrayLike, r: ArrayLike, vx: ArrayLike) -> FloatArray:
