@@ -143,6 +143,8 @@ def test_missing_roll_inertia_and_damping_fall_back_to_typical_dynamics() -> Non
     assert phi[-1] == pytest.approx(suspension_roll(t, ay, full)[-1], rel=0.02)
     # eq 41 as written has no gravity moment, so it settles exactly on eq 43: m h a_y / k
     assert phi[-1] == pytest.approx(float(suspension_roll_steady(4.0, rough)), rel=0.02)
-    drive = drive_from_columns({"t": t, "wz": 0 * t, "ay": ay, "steer": 0 * t, "v_can": 20 + 0 * t})
+    drive = drive_from_columns(
+        {"t": t, "wz": 0 * t, "ax": 0 * t, "ay": ay, "steer": 0 * t, "v_can": 20 + 0 * t}
+    )
     for name in ("roll_index", "obs_modified", "obs_kinematic"):
         assert why_not(all_methods()[name], drive, rough) is None
