@@ -75,9 +75,9 @@ from sideslip.methods.registry import SPEED, register
 from sideslip.models.roll import (
     dynamic_bank_weight,
     dynamic_factor,
+    roll_dynamics,
     sin_roll_from_ay,
     sin_roll_from_r,
-    roll_dynamics,
     suspension_roll,
     tseng_gains,
 )
