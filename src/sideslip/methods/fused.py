@@ -727,7 +727,10 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, noise: FusedNoise | None 
     )
 
 
-COLUMNS = ("wz", "ay", SPEED, "gnss_ve", "gnss_vn")  # ax, wx, wy, gnss_e/n used when present
+# GNSS: Doppler velocity or positions (or both); ax, wx, wy used when present.  Without any
+# GNSS the filter would rest on the vehicle file's slip gain alone: the model-based methods are
+# better there, so fused then leaves the drive to them.
+COLUMNS = ("wz", "ay", SPEED, ("gnss_ve", "gnss_e"))
 PAPER = "this toolkit (fuses seeds 000, 001, 004 ideas)"
 
 
