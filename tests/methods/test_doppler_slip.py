@@ -159,13 +159,23 @@ def test_slip_correction_is_really_applied_in_curves() -> None:
     assert est.params["slip_correction_applied"] is True
 
 
-def test_poor_curve_data_fall_back_to_no_correction_and_say_why() -> None:
+def test_poor_curve_data_fall_back_to_the_vehicle_file_then_to_no_correction() -> None:
+    import math
+
     drive = steady_drive(0).slice(0, 2800)  # standstill, pull-away, 200 m straight: no curve
-    est = doppler_slip(drive, load_vehicle(VEHICLE))
+    vehicle = load_vehicle(VEHICLE)
+    est = doppler_slip(drive, vehicle)
     p = est.params
-    assert p["slip_correction_applied"] is False
+    assert p["K"] == 0.0  # nothing identified ...
+    assert p["K_source"] == "vehicle file"  # ... so the file's m lf / (L cr) is used, and said
+    assert p["K_used"] == pytest.approx(p["K_vehicle_accel"])
     assert "no slip correction applied" in p["slip_correction_note"]
-    assert p["K"] == 0.0
+    assert "using the vehicle file's K instead" in p["slip_correction_note"]
+    # a file without the rear cornering stiffness: no correction at all, and said why
+    est = doppler_slip(drive, vehicle.with_changes(cr=math.nan))
+    p = est.params
+    assert p["K_source"] == "none" and p["slip_correction_applied"] is False
+    assert "no slip correction applied" in p["slip_correction_note"]
     for name, values in est.series.items():
         assert np.isfinite(values).all(), name
 

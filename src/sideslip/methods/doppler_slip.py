@@ -48,9 +48,11 @@ Steps (each a module of its own):
 
 Guards (failure modes of the open ROS implementation, designed out):
 * K is accepted only when enough curve data span a range of G_y, its 1-sigma is below half its
-  value, and it lies in (0, ``K_MAX``] s^2/m; otherwise no slip correction is applied
-  (beta_r = 0; beta = l_r r / V, the kinematic part) and ``params`` carry
-  ``slip_correction_applied = False`` with the reason.  Never a silent disable.
+  value, and it lies in (0, ``K_MAX``] s^2/m.  Otherwise the vehicle file's K = m l_f / (L c_r)
+  is used when the file gives it (``K_source = "vehicle file"``, 40 % uncertainty in
+  ``beta_std``), and failing that no slip correction is applied (beta_r = 0; beta = l_r r / V,
+  the kinematic part; ``K_source = "none"``, ``slip_correction_applied = False``).  The reason
+  is always in ``slip_correction_note``: never a silent disable.
 * The yaw-rate sign is checked against the GNSS course change (InputError naming ``wz``).
 * ``beta_std`` is an explicit function of the current G_y (sigma_K |G_y| with a 10 % model
   term and a 0.1 deg floor), so it cannot grow without bound after a turn.
@@ -321,7 +323,19 @@ def run_doppler_slip(drive: Drive, vehicle: Vehicle, use_roll: bool = True) -> E
     r_s = moving_average(r_corr, width)
     gy = r_s * v_h + (G * np.sin(roll) if use_roll else 0.0)
     forward = speed >= 0.1
-    beta_r = np.where(forward, -gain.k * gy, 0.0)
+    # K: identified from this drive's GNSS; else the vehicle file's m lf / (L cr) (scaled as
+    # the identified K would be when G_y includes the roll term); else no correction.
+    k_vehicle = vehicle.slip_gain_k
+    k_vehicle_accel = k_vehicle
+    if use_roll and np.isfinite(vehicle.static_roll_gain):
+        k_vehicle_accel = k_vehicle / (1.0 + G * vehicle.static_roll_gain)
+    if gain.applied:
+        k_used, k_source = gain.k, "identified"
+    elif np.isfinite(k_vehicle_accel) and 0.0 < k_vehicle_accel <= K_MAX:
+        k_used, k_source = float(k_vehicle_accel), "vehicle file"
+    else:
+        k_used, k_source = 0.0, "none"
+    beta_r = np.where(forward, -k_used * gy, 0.0)
     if np.isfinite(vehicle.lr):
         kin = np.arctan(vehicle.lr * r_s / np.maximum(v_h, V_KIN))
         beta = np.where(forward, beta_r + kin, 0.0)
@@ -330,9 +344,10 @@ def run_doppler_slip(drive: Drive, vehicle: Vehicle, use_roll: bool = True) -> E
         beta = beta_r
         params["beta_point"] = "rear axle (vehicle file gives no lr)"
     beta = np.clip(beta, -0.5, 0.5)
-    k_vehicle = vehicle.slip_gain_k
-    if gain.applied:
+    if k_source == "identified":
         k_unc = np.hypot(gain.k_std, 0.1 * gain.k)
+    elif k_source == "vehicle file":
+        k_unc = 0.4 * k_used  # users' cornering stiffnesses are often 30 % off or worse
     else:
         k_unc = k_vehicle if np.isfinite(k_vehicle) else 0.01
     beta_std = np.hypot(k_unc * np.abs(gy), BETA_FLOOR)
@@ -373,9 +388,12 @@ def run_doppler_slip(drive: Drive, vehicle: Vehicle, use_roll: bool = True) -> E
         K_samples=gain.n_samples,
         K_residual_std_deg=float(np.degrees(gain.residual_std)),
         K_vehicle=k_vehicle,
-        K_vehicle_accel=k_vehicle / (1.0 + G * vehicle.static_roll_gain) if use_roll else k_vehicle,
-        slip_correction_applied=gain.applied,
-        slip_correction_note=gain.reason,
+        K_vehicle_accel=k_vehicle_accel,
+        K_used=k_used,
+        K_source=k_source,
+        slip_correction_applied=k_source != "none",
+        slip_correction_note=gain.reason
+        + ("; using the vehicle file's K instead" if k_source == "vehicle file" else ""),
         **fit.params(),
     )
     for key, value in series.items():
