@@ -398,10 +398,10 @@ def test_missing_steering_column_names_it():
         run_method(all_methods()["ekf_wss_sas"], drive, SEDAN)
 
 
-def test_vehicle_without_rear_track_is_refused_by_name():
-    veh = Vehicle(name="x", source="x.toml", lf=1.2, lr=1.6)
+def test_vehicle_without_lr_is_refused_by_name():
+    veh = Vehicle(name="x", source="x.toml", lf=1.2)
     drive = sim_drive("suburban_outages", 0)
-    with pytest.raises(InputError, match="track_rear"):
+    with pytest.raises(InputError, match="'lr'"):
         run_method(all_methods()["ekf_wss_sas"], drive, veh)
 
 
@@ -415,3 +415,24 @@ def test_vehicle_file_with_only_geometry_runs_on_typical_defaults():
     assert est.params["understeer_gradient_std"] < 0.0015  # the drive taught it something
     err = np.hypot(est["e"] - drive["ref_e"], est["n"] - drive["ref_n"])
     assert math.sqrt(np.mean(err**2)) < 2.5  # GNSS 1 Hz with a 1 m drifting error
+
+
+def test_a_vehicle_file_without_track_runs_and_says_what_it_assumed() -> None:
+    """Rough vehicle files often lack the track: the EKF takes the front track, else a typical
+    1.55 m, says so in the params, and still tracks the position (a 2 % track error scales
+    the wheel-difference yaw rate by 2 %, which the GNSS updates correct)."""
+    import math
+
+    from sideslip.evaluate import metrics
+    from sideslip.methods.registry import all_methods, run_method, why_not
+
+    drive = sim_drive("demo")
+    v = load_vehicle(drive.meta["vehicle"])
+    rough = v.with_changes(track_rear=math.nan, track_front=math.nan)
+    method = all_methods()["ekf_wss_sas"]
+    assert why_not(method, drive, rough) is None
+    est = run_method(method, drive, rough)
+    assert est.params["track_rear_source"].startswith("assumed 1.55 m")
+    assert metrics(drive, est.series)["pos_rmse_m"] < 3.0
+    front_only = v.with_changes(track_rear=math.nan)
+    assert run_method(method, drive, front_only).params["track_rear_m"] == v.track_front

@@ -701,12 +701,27 @@ def _vehicle_model_numbers(vehicle: Vehicle, tuning: EkfTuning) -> tuple[float, 
     return kus, kus_std, min(slip, 0.05)
 
 
+TYPICAL_TRACK_M = 1.55  # passenger-car rear track, used when the vehicle file gives none
+
+
+def rear_track(vehicle: Vehicle) -> tuple[float, str]:
+    """Rear track (m) and where it came from: the file's track_rear, else its track_front,
+    else a typical 1.55 m (rough vehicle files often give neither)."""
+    if math.isfinite(vehicle.track_rear):
+        return float(vehicle.track_rear), "vehicle file"
+    if math.isfinite(vehicle.track_front):
+        return float(vehicle.track_front), "vehicle file's track_front (no track_rear)"
+    return TYPICAL_TRACK_M, "assumed 1.55 m (the vehicle file gives no track)"
+
+
 def run_ekf(
     drive: Drive, vehicle: Vehicle, use_gyro: bool, tuning: EkfTuning | None = None
 ) -> EkfResult:
     """Run the seed-004 EKF over a drive (see module docstring); the methods wrap this."""
     tu = tuning if tuning is not None else EkfTuning()
-    vehicle.need("lf", "lr", "track_rear")
+    vehicle.need("lf", "lr")
+    if not math.isfinite(vehicle.track_rear):
+        vehicle = vehicle.with_changes(track_rear=rear_track(vehicle)[0])
     t = drive.t
     nan = np.full(t.size, np.nan)
     v_rl = drive["v_rl"] if "v_rl" in drive else nan
@@ -813,6 +828,8 @@ def _estimate(name: str, res: EkfResult, drive: Drive, vehicle: Vehicle, use_gyr
         "gnss_fixes_rejected": int(np.sum(res.gnss_flag == GNSS_REJECTED)),
         "gnss_fixes_forced": int(np.sum(res.gnss_flag == GNSS_FORCED)),
         "alignment": {k: v for k, v in res.align.items()},
+        "track_rear_m": rear_track(vehicle)[0],
+        "track_rear_source": rear_track(vehicle)[1],
     }
     if use_gyro:
         params["gyro_bias"] = float(x[last, BG])
@@ -821,7 +838,7 @@ def _estimate(name: str, res: EkfResult, drive: Drive, vehicle: Vehicle, use_gyr
 
 
 _COLUMNS = ("v_rl", "v_rr", "steer", "gnss_e", "gnss_n")
-_VEHICLE = ("lf", "lr", "track_rear")
+_VEHICLE = ("lf", "lr")  # the rear track: see rear_track()
 
 
 @register(
