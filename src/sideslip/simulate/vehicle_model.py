@@ -162,15 +162,8 @@ def _row_at(R: FloatArray, row: int, s: float, ds: float) -> float:
 
 @njit(cache=True)
 def _table_at(T: FloatArray, row: int, t: float, dtab: float) -> float:
-    n = T.shape[1]
-    x = t / dtab
-    if x <= 0.0:
-        return T[row, 0]
-    if x >= n - 1:
-        return T[row, n - 1]
-    i = int(x)
-    f = x - i
-    return T[row, i] + f * (T[row, i + 1] - T[row, i])
+    """A time table's row at time t (uniform step dtab): the same interpolation as _row_at."""
+    return _row_at(T, row, t, dtab)
 
 
 @njit(cache=True)
