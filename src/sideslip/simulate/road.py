@@ -120,6 +120,30 @@ def _geometry_from_curvature(
     return e, n, heading
 
 
+def _road(
+    s: FloatArray,
+    curvature: FloatArray,
+    ds: float,
+    start: tuple[float, float, float],
+    bank_deg: Sequence[tuple[float, float]],
+    grade_pct: Sequence[tuple[float, float]],
+    mu: Sequence[tuple[float, float]],
+) -> Road:
+    """A road from its curvature along s (geometry integrated from ``start`` = (e, n, heading))
+    and its bank (deg), grade (%) and friction knot profiles."""
+    e, n, heading = _geometry_from_curvature(curvature, ds, *start)
+    return Road(
+        s=s,
+        e=e,
+        n=n,
+        heading=heading,
+        curvature=curvature,
+        bank=profile(s, bank_deg, math.pi / 180.0),
+        grade=np.arctan(profile(s, grade_pct, 0.01)),
+        mu=profile(s, mu),
+    )
+
+
 def road_from_pieces(
     pieces: Sequence[Piece],
     bank_deg: Sequence[tuple[float, float]] = ((0.0, 0.0),),
@@ -141,17 +165,7 @@ def road_from_pieces(
     for (plen, k0, k1), a in zip(pieces, edges[:-1], strict=True):
         sel = (s >= a) & (s <= a + plen)
         curvature[sel] = k0 + (k1 - k0) * (s[sel] - a) / plen
-    e, n, heading = _geometry_from_curvature(curvature, ds, *start)
-    return Road(
-        s=s,
-        e=e,
-        n=n,
-        heading=heading,
-        curvature=curvature,
-        bank=profile(s, bank_deg, math.pi / 180.0),
-        grade=np.arctan(profile(s, grade_pct, 0.01)),
-        mu=profile(s, mu),
-    )
+    return _road(s, curvature, ds, start, bank_deg, grade_pct, mu)
 
 
 def road_from_xy(
@@ -175,17 +189,7 @@ def road_from_xy(
     mid_arc = 0.5 * (arc[1:] + arc[:-1])
     heading = np.interp(s, mid_arc, heading_poly)
     curvature = np.gradient(heading, ds)
-    e, n, heading = _geometry_from_curvature(curvature, ds, float(x[0]), float(y[0]), heading[0])
-    return Road(
-        s=s,
-        e=e,
-        n=n,
-        heading=heading,
-        curvature=curvature,
-        bank=profile(s, bank_deg, math.pi / 180.0),
-        grade=np.arctan(profile(s, grade_pct, 0.01)),
-        mu=profile(s, mu),
-    )
+    return _road(s, curvature, ds, (float(x[0]), float(y[0]), heading[0]), bank_deg, grade_pct, mu)
 
 
 def _smooth_noise(rng: np.random.Generator, m: int, ds: float, length: float) -> FloatArray:
