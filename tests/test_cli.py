@@ -106,3 +106,40 @@ def test_evaluate_rejects_estimates_of_another_drive(tmp_path):
     res = run_cli("evaluate", CIRCLE, other)
     assert res.returncode == 2
     assert "column 't': expected the drive's time stamps" in res.stderr
+
+
+def test_estimate_set_reaches_the_method_and_is_recorded_in_params(tmp_path):
+
+    out = tmp_path / "e.csv"
+    res = run_cli(
+        "estimate",
+        CIRCLE,
+        "--vehicle",
+        "midsize_sedan",
+        "--method",
+        "fg_batch",
+        "--set",
+        "fg_batch.lateral_acceleration=7",
+        "--out",
+        out,
+    )
+    assert res.returncode == 0, res.stderr
+    params = json.loads((tmp_path / "e.params.json").read_text())
+    assert params["fg_batch"]["settings"]["lateral_acceleration"] == 7.0
+
+
+def test_estimate_config_file_and_bad_settings_are_one_line_and_write_nothing(tmp_path):
+
+    cfg = tmp_path / "tuning.toml"
+    cfg.write_text("[fg_batch]\nwindow = 2.5\n")
+    out = tmp_path / "e.csv"
+    res = run_cli("estimate", CIRCLE, "--vehicle", "midsize_sedan", "--config", cfg, "--out", out)
+    assert res.returncode == 2 and not out.exists()
+    assert "tuning.toml: fg_batch: setting 'window'" in res.stderr and "integer" in res.stderr
+    res = run_cli("estimate", CIRCLE, "--vehicle", "midsize_sedan", "--set", "fg_batch.nope=1", "--out", out)
+    assert res.returncode == 2 and "unknown setting 'nope'" in res.stderr and not out.exists()
+    res = run_cli(
+        "estimate", CIRCLE, "--vehicle", "midsize_sedan", "--set", "fg_batch.model_beta=-1", "--out", out
+    )
+    assert res.returncode == 2 and "model_beta" in res.stderr and "> 0" in res.stderr
+    assert len(res.stderr.strip().splitlines()) == 1

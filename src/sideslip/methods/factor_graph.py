@@ -472,6 +472,7 @@ def _estimate(
     summary="factor-graph batch smoother on the linear single-track model (off-line)",
     paper=PAPER,
     vehicle_params=VEHICLE_PARAMS,
+    settings=FactorGraphSettings,
 )
 def fg_batch(
     drive: Drive, vehicle: Vehicle, settings: FactorGraphSettings = DEFAULT_SETTINGS
@@ -488,6 +489,7 @@ def fg_batch(
     summary="factor-graph fixed-lag smoother (window 5) on the linear single-track model",
     paper=PAPER,
     vehicle_params=VEHICLE_PARAMS,
+    settings=FactorGraphSettings,
 )
 def fg_lag(
     drive: Drive, vehicle: Vehicle, settings: FactorGraphSettings = DEFAULT_SETTINGS
@@ -508,6 +510,7 @@ def fg_lag(
     summary="linear Kalman filter on the same single-track model and noise (seed 002's baseline)",
     paper=PAPER,
     vehicle_params=VEHICLE_PARAMS,
+    settings=FactorGraphSettings,
 )
 def kf_linear(
     drive: Drive, vehicle: Vehicle, settings: FactorGraphSettings = DEFAULT_SETTINGS

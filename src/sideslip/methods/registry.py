@@ -1,25 +1,30 @@
 """Methods registry: name -> function, the columns it needs, its vehicle parameters, its paper.
 
-A method is a plain function ``f(drive, vehicle) -> Estimate``.  Modules in
+A method is a plain function ``f(drive, vehicle) -> Estimate``, or, when it has tuning,
+``f(drive, vehicle, settings) -> Estimate`` with ``settings`` an instance of the frozen dataclass
+given to :func:`register` (``settings=Cls``; see :mod:`sideslip.settings`).  Modules in
 ``sideslip.methods`` register theirs with :func:`register`; :func:`all_methods` imports every
-module of the package, so a new module needs no edit elsewhere.
+module of the package, so a new module needs no edit elsewhere.  :func:`run_method` records the
+settings a method ran with in its params (``params["settings"]``).
 """
 
 from __future__ import annotations
 
 import importlib
 import pkgutil
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from sideslip.drive import SPEED_COLUMNS, Drive
 from sideslip.errors import InputError
 from sideslip.estimate import Estimate, check_estimate
+from sideslip.settings import make_settings, settings_dict
 from sideslip.vehicle import Vehicle
 
-MethodFunc = Callable[[Drive, Vehicle], Estimate]
+MethodFunc = Callable[..., Estimate]  # (drive, vehicle) or (drive, vehicle, settings)
 SPEED = SPEED_COLUMNS  # "one of the wheel speeds or v_can"
 
 
@@ -29,6 +34,7 @@ class Method:
 
     ``columns``: each entry is a column name, or a tuple of alternatives of which one suffices.
     ``vehicle_params``: vehicle parameters the method reads.
+    ``settings``: the method's settings dataclass (None: the method has no tuning).
     """
 
     name: str
@@ -37,6 +43,11 @@ class Method:
     vehicle_params: tuple[str, ...]
     summary: str
     paper: str
+    settings: type | None = None
+
+    def default_settings(self) -> Any:
+        """The settings the method runs with when the user gives none (None: no tuning)."""
+        return self.settings() if self.settings is not None else None
 
     def columns_text(self) -> str:
         return ", ".join(c if isinstance(c, str) else "|".join(c) for c in self.columns)
@@ -52,15 +63,20 @@ def register(
     summary: str,
     paper: str,
     vehicle_params: Sequence[str] = (),
+    settings: type | None = None,
 ) -> Callable[[MethodFunc], MethodFunc]:
-    """Decorator: register ``func`` under ``name`` (a lower-case identifier)."""
+    """Decorator: register ``func`` under ``name`` (a lower-case identifier).
+
+    ``settings``: a frozen dataclass of the method's tuning; ``func`` is then called as
+    ``func(drive, vehicle, settings)``.
+    """
     if not name.isidentifier() or name != name.lower():
         raise ValueError(f"method name {name!r} must be a lower-case identifier")
 
     def deco(func: MethodFunc) -> MethodFunc:
         if name in _REGISTRY and _REGISTRY[name].func is not func:
             raise ValueError(f"method {name!r} registered twice")
-        _REGISTRY[name] = Method(name, func, tuple(columns), tuple(vehicle_params), summary, paper)
+        _REGISTRY[name] = Method(name, func, tuple(columns), tuple(vehicle_params), summary, paper, settings)
         return func
 
     return deco
@@ -97,8 +113,52 @@ def why_not(method: Method, drive: Drive, vehicle: Vehicle) -> str | None:
     return None
 
 
-def run_method(method: Method, drive: Drive, vehicle: Vehicle) -> Estimate:
-    """Run one method after checking its needs; raises InputError naming what is missing."""
+def get_method(name_or_method: str | Method) -> Method:
+    """The registered method of that name (or the Method itself); InputError when unknown."""
+    if isinstance(name_or_method, Method):
+        return name_or_method
+    registry = all_methods()
+    if name_or_method not in registry:
+        raise InputError(
+            "method", f"unknown method '{name_or_method}': expected one of {', '.join(registry)}"
+        )
+    return registry[name_or_method]
+
+
+def resolve_settings(overrides: Mapping[str, Mapping[str, Any]], where: str = "settings") -> dict[str, Any]:
+    """Method name -> settings object from ``{method: {field: value}}`` (TOML or ``--set``).
+
+    An unknown method, a method without settings, an unknown field or a value out of range is
+    one InputError line naming ``where``, the method and the field.
+    """
+    out: dict[str, Any] = {}
+    for name, values in overrides.items():
+        method = get_method(name) if name in all_methods() else None
+        if method is None:
+            raise InputError(where, f"unknown method '{name}': expected one of {', '.join(all_methods())}")
+        if method.settings is None:
+            raise InputError(where, f"method '{name}' has no settings")
+        out[name] = make_settings(method.settings, values, f"{where}: {name}")
+    return out
+
+
+def run_method(method: str | Method, drive: Drive, vehicle: Vehicle, settings: Any = None) -> Estimate:
+    """Run one method (by name or Method) after checking its needs; raises InputError naming
+    what is missing.  ``settings``: an instance of the method's settings class, a mapping of
+    field -> value applied to its defaults, or None for the defaults."""
+    method = get_method(method)
+    if method.settings is None and settings is not None:
+        raise InputError("settings", f"method '{method.name}' has no settings")
+    if method.settings is not None:
+        if settings is None:
+            settings = method.default_settings()
+        elif isinstance(settings, Mapping):
+            settings = make_settings(method.settings, settings, f"settings: {method.name}")
+        elif not isinstance(settings, method.settings):
+            raise TypeError(
+                f"settings for {method.name} must be {method.settings.__name__}, "
+                f"not {type(settings).__name__}"
+            )
     cols = missing_columns(method, drive)
     if cols:
         raise InputError(
@@ -113,9 +173,12 @@ def run_method(method: Method, drive: Drive, vehicle: Vehicle) -> Estimate:
             f"parameter '{params[0]}' is needed by method '{method.name}' "
             "but the vehicle file does not give it",
         )
-    est = method.func(drive, vehicle)
-    if est.method != method.name:
-        est = Estimate(method.name, est.t, est.series, est.params)
+    est = method.func(drive, vehicle) if method.settings is None else method.func(drive, vehicle, settings)
+    if est.method != method.name or (settings is not None and "settings" not in est.params):
+        params = dict(est.params)
+        if settings is not None:
+            params.setdefault("settings", settings_dict(settings))
+        est = Estimate(method.name, est.t, est.series, params)
     check_estimate(est, len(drive))
     if not np.array_equal(est.t, drive.t):
         raise RuntimeError(f"method {method.name}: estimate is not on the drive's time base")

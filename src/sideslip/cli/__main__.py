@@ -1,0 +1,5 @@
+"""`python -m sideslip.cli`."""
+
+from sideslip.cli import main
+
+main()
