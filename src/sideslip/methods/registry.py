@@ -175,10 +175,10 @@ def run_method(method: str | Method, drive: Drive, vehicle: Vehicle, settings: A
         )
     est = method.func(drive, vehicle) if method.settings is None else method.func(drive, vehicle, settings)
     if est.method != method.name or (settings is not None and "settings" not in est.params):
-        params = dict(est.params)
+        est_params = dict(est.params)
         if settings is not None:
-            params.setdefault("settings", settings_dict(settings))
-        est = Estimate(method.name, est.t, est.series, params)
+            est_params.setdefault("settings", settings_dict(settings))
+        est = Estimate(method.name, est.t, est.series, est_params)
     check_estimate(est, len(drive))
     if not np.array_equal(est.t, drive.t):
         raise RuntimeError(f"method {method.name}: estimate is not on the drive's time base")
