@@ -29,14 +29,19 @@ class Estimate:
 
     ``series`` maps names such as ``beta`` (rad, at the CG), ``r`` (rad/s), ``yaw``, ``roll``,
     ``bank`` (rad), ``e``/``n`` (m, ENU), ``vx``/``vy`` (m/s), ``gyro_bias`` (rad/s), ``ay_bias``
-    (m/s^2) and 1-sigma series ``<name>_std`` to arrays as long as ``t``.  ``params`` holds
-    identified parameters and diagnostics (JSON-serialisable: numbers, strings, lists, dicts).
+    (m/s^2), 1-sigma series ``<name>_std`` and ``health`` (0 good ... 1 unusable) to arrays as
+    long as ``t``.  ``params`` holds identified parameters and diagnostics (JSON-serialisable:
+    numbers, strings, lists, dicts).  ``innovations`` maps a measurement name to per-row arrays
+    of what a filter saw, e.g. ``"course"`` (innovation, rad; NaN where no update) and
+    ``"course_nis"`` (normalised innovation squared); they are kept in memory for diagnostics
+    and tests, not written to the contract table.
     """
 
     method: str
     t: FloatArray
     series: Mapping[str, FloatArray]
     params: Mapping[str, Any] = field(default_factory=dict)
+    innovations: Mapping[str, FloatArray] = field(default_factory=dict)
 
     def __getitem__(self, name: str) -> FloatArray:
         return self.series[name]

@@ -109,6 +109,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from sideslip import typical
 from sideslip.drive import Drive
 from sideslip.estimate import Estimate
 from sideslip.methods.registry import register
@@ -701,17 +702,7 @@ def _vehicle_model_numbers(vehicle: Vehicle, tuning: EkfTuning) -> tuple[float, 
     return kus, kus_std, min(slip, 0.05)
 
 
-TYPICAL_TRACK_M = 1.55  # passenger-car rear track, used when the vehicle file gives none
-
-
-def rear_track(vehicle: Vehicle) -> tuple[float, str]:
-    """Rear track (m) and where it came from: the file's track_rear, else its track_front,
-    else a typical 1.55 m (rough vehicle files often give neither)."""
-    if math.isfinite(vehicle.track_rear):
-        return float(vehicle.track_rear), "vehicle file"
-    if math.isfinite(vehicle.track_front):
-        return float(vehicle.track_front), "vehicle file's track_front (no track_rear)"
-    return TYPICAL_TRACK_M, "assumed 1.55 m (the vehicle file gives no track)"
+rear_track = typical.track_rear  # the file's rear track, else its front track, else typical
 
 
 def run_ekf(

@@ -178,7 +178,7 @@ def run_method(method: str | Method, drive: Drive, vehicle: Vehicle, settings: A
         est_params = dict(est.params)
         if settings is not None:
             est_params.setdefault("settings", settings_dict(settings))
-        est = Estimate(method.name, est.t, est.series, est_params)
+        est = Estimate(method.name, est.t, est.series, est_params, est.innovations)
     check_estimate(est, len(drive))
     if not np.array_equal(est.t, drive.t):
         raise RuntimeError(f"method {method.name}: estimate is not on the drive's time base")

@@ -39,6 +39,7 @@ import numba
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from sideslip.typical import TYPICAL
 from sideslip.vehicle import G, Vehicle
 
 FloatArray = NDArray[np.float64]
@@ -82,8 +83,8 @@ def _roll_oscillator(t: NDArray, force: NDArray, inertia: float, damping: float,
     return out
 
 
-TYPICAL_ROLL_FREQUENCY_HZ = 1.5  # passenger cars: body roll natural frequency 1.2-2 Hz
-TYPICAL_ROLL_DAMPING_RATIO = 0.5  # passenger cars: 0.3-0.7
+TYPICAL_ROLL_FREQUENCY_HZ = TYPICAL["roll_frequency_hz"].value
+TYPICAL_ROLL_DAMPING_RATIO = TYPICAL["roll_damping_ratio"].value
 
 
 def roll_dynamics(vehicle: Vehicle) -> tuple[float, float, bool]:
