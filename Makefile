@@ -1,22 +1,40 @@
 # Two commands on a fresh machine with Python 3.11+ and make: `make demo`, `make test`.
+# Dependencies: pyproject.toml declares compatible ranges; constraints.txt pins the exact
+# versions installed here (and in CI).
 PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test lint bench clean
+.PHONY: demo test test-browser browser lint bench clean
 
-$(STAMP): pyproject.toml
+$(STAMP): pyproject.toml constraints.txt
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e ".[all]"
+	$(BIN)/python -m pip install --quiet -c constraints.txt -e ".[all]"
 	touch $(STAMP)
 
 demo: $(STAMP)
 	$(BIN)/sideslip demo
 
-test: $(STAMP)
+# Headless Chromium for the report's browser tests (Debian package).  As root (CI) it is
+# installed when missing; otherwise a note is printed and the browser tests skip.
+browser:
+	@if command -v chromium >/dev/null 2>&1; then :; \
+	elif [ "$$(id -u)" = "0" ]; then \
+		apt-get update && DEBIAN_FRONTEND=noninteractive apt-get install -y chromium; \
+	else \
+		echo "note: chromium is not installed and this is not root: the browser tests will skip" \
+		     "(sudo apt-get install chromium, then make test-browser)"; \
+	fi
+
+test: $(STAMP) browser
 	$(BIN)/python -m pytest -q -n 2 --dist loadfile
+
+test-browser: $(STAMP)
+	@command -v chromium >/dev/null 2>&1 || \
+		(apt-get update && DEBIAN_FRONTEND=noninteractive apt-get install -y chromium)
+	$(BIN)/python -m pytest -q -p no:xdist -m browser tests/report
 
 lint: $(STAMP)
 	$(BIN)/ruff check src tests benchmarks
