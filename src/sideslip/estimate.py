@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import json
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -45,6 +45,66 @@ class Estimate:
 
     def __getitem__(self, name: str) -> FloatArray:
         return self.series[name]
+
+    def to_frame(self, prefix: bool = False) -> pd.DataFrame:
+        """The series as a table: ``t`` and one column per series (``M.beta`` with ``prefix``)."""
+        return estimates_frame(self.t, [self]) if prefix else pd.DataFrame(
+            {"t": self.t, **{k: np.asarray(v, dtype=float) for k, v in self.series.items()}}
+        )
+
+
+SKIPPED_KEY = "_skipped"  # params JSON entry: method -> why it did not run
+
+
+@dataclass(frozen=True)
+class Estimates:
+    """The result of :func:`sideslip.estimate`: the estimates that ran, and why others did not.
+
+    ``est["fused"]`` is one :class:`Estimate`; iteration yields them in run order;
+    :meth:`to_frame` is the contract's output table (``t``, ``M.beta``, ...); ``skipped`` maps
+    a method name to the reason it could not run on this drive and vehicle.
+    """
+
+    t: FloatArray
+    estimates: tuple[Estimate, ...]
+    skipped: Mapping[str, str] = field(default_factory=dict)
+
+    def __getitem__(self, method: str) -> Estimate:
+        for est in self.estimates:
+            if est.method == method:
+                return est
+        raise KeyError(f"no estimate of method {method!r}: ran {', '.join(self.names) or 'none'}")
+
+    def __iter__(self) -> Iterator[Estimate]:
+        return iter(self.estimates)
+
+    def __len__(self) -> int:
+        return len(self.estimates)
+
+    def __contains__(self, method: object) -> bool:
+        return method in self.names
+
+    @property
+    def names(self) -> list[str]:
+        """Methods that ran, in run order."""
+        return [e.method for e in self.estimates]
+
+    @property
+    def params(self) -> dict[str, Any]:
+        """Method -> identified parameters and diagnostics (as in the params JSON)."""
+        return {e.method: dict(e.params) for e in self.estimates}
+
+    def series(self) -> dict[str, dict[str, FloatArray]]:
+        """Method -> series name -> array (the layout :func:`load_estimates` returns)."""
+        return {"": {"t": self.t}, **{e.method: dict(e.series) for e in self.estimates}}
+
+    def to_frame(self) -> pd.DataFrame:
+        """The contract's output table: ``t`` and ``M.<series>`` for each method M."""
+        return estimates_frame(self.t, self.estimates)
+
+    def save(self, path: str | Path, meta: Mapping[str, Any] | None = None) -> Path:
+        """Write the table and its ``.params.json`` (as ``sideslip estimate``); returns the JSON."""
+        return save_estimates(self.t, self.estimates, path, meta, self.skipped)
 
 
 def check_estimate(est: Estimate, n: int) -> None:
@@ -87,12 +147,22 @@ def params_path(table_path: Path) -> Path:
 
 
 def save_estimates(
-    t: FloatArray, estimates: Sequence[Estimate], path: str | Path, meta: Mapping[str, Any] | None = None
+    t: FloatArray,
+    estimates: Sequence[Estimate],
+    path: str | Path,
+    meta: Mapping[str, Any] | None = None,
+    skipped: Mapping[str, str] | None = None,
 ) -> Path:
-    """Write the estimate table and its parameter JSON; returns the JSON path."""
+    """Write the estimate table and its parameter JSON; returns the JSON path.
+
+    ``skipped`` (method -> reason it did not run) goes to the JSON under ``"_skipped"`` so the
+    report can list it; every other key of the JSON is a method name.
+    """
     p = Path(path)
     frame = estimates_frame(t, estimates)
-    params = {est.method: _jsonable(dict(est.params)) for est in estimates}
+    params: dict[str, Any] = {est.method: _jsonable(dict(est.params)) for est in estimates}
+    if skipped:
+        params[SKIPPED_KEY] = dict(skipped)
     save_table(frame, p, meta)
     jp = params_path(p)
     _atomic_write(jp, lambda tmp: tmp.write_text(json.dumps(params, indent=2)))
@@ -115,3 +185,8 @@ def load_estimates(path: str | Path) -> dict[str, dict[str, FloatArray]]:
         values = pd.to_numeric(frame[col], errors="coerce").to_numpy(dtype=float)
         out.setdefault(method, {})[name] = values
     return out
+
+
+from sideslip._callable import make_callable  # noqa: E402  (last: the module must exist)
+
+make_callable(__name__, "sideslip.api:estimate")  # sideslip.estimate(drive, vehicle, methods)

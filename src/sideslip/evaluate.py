@@ -205,3 +205,8 @@ def evaluate_all(
 ) -> dict[str, dict[str, float]]:
     """method -> metric -> value for every method in an estimate table (see load_estimates)."""
     return {method: metrics(drive, series, windows) for method, series in estimates.items() if method}
+
+
+from sideslip._callable import make_callable  # noqa: E402  (last: the module must exist)
+
+make_callable(__name__, "sideslip.api:evaluate")  # sideslip.evaluate(drive, estimates)
