@@ -43,10 +43,12 @@ _LAZY = {
     "Estimates": "sideslip.estimate",
     "InputError": "sideslip.errors",
 }
-__all__ = ["__version__", *_LAZY]
+__all__ = [
+    "Drive", "Estimate", "Estimates", "InputError", "Vehicle", "__version__", "estimate", "evaluate",
+    "load_drive", "load_vehicle", "methods", "simulate_drive",
+]  # fmt: skip
 
 if TYPE_CHECKING:
-    from sideslip import estimate, evaluate
     from sideslip.api import load_drive, load_vehicle, methods, simulate_drive
     from sideslip.drive import Drive
     from sideslip.errors import InputError

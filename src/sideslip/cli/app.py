@@ -1,10 +1,16 @@
-"""The Typer application and what every command shares: consoles, one-line errors, --debug."""
+"""The Typer application and what every command shares: consoles, one-line errors, global flags
+(``--version``, ``-h``, ``-q``/``-v``, ``--debug``), output writing and progress bars."""
 
 from __future__ import annotations
 
+import contextlib
 import functools
+import os
+import stat
 import sys
-from collections.abc import Callable
+import tempfile
+from collections.abc import Callable, Iterator
+from pathlib import Path
 from typing import Annotated, Any, TypeVar
 
 import typer
@@ -16,18 +22,35 @@ app = typer.Typer(
     name="sideslip",
     help="Vehicle sideslip, roll/bank, heading, bias and trajectory estimation from GNSS, IMU and CAN.",
     no_args_is_help=True,
-    add_completion=False,
+    add_completion=True,
     pretty_exceptions_enable=False,
+    context_settings={"help_option_names": ["-h", "--help"]},
 )
 console = Console()
 err_console = Console(stderr=True)
-_STATE = {"debug": False}
+_STATE = {"debug": False, "quiet": False, "verbose": False}
 F = TypeVar("F", bound=Callable[..., Any])
 
 
 def say(line: str) -> None:
     """One plain line on stderr, never wrapped (errors must stay one line at any width)."""
     err_console.print(line, markup=False, highlight=False, soft_wrap=True)
+
+
+def note(line: str) -> None:
+    """A progress or status line on stderr; silenced by ``-q``."""
+    if not _STATE["quiet"]:
+        say(line)
+
+
+def detail(line: str) -> None:
+    """A diagnostic line on stderr, shown only with ``-v``."""
+    if _STATE["verbose"] and not _STATE["quiet"]:
+        say(line)
+
+
+def quiet() -> bool:
+    return bool(_STATE["quiet"])
 
 
 def _fail(message: str, code: int = 2) -> None:
@@ -53,11 +76,129 @@ def guarded(func: F) -> F:
     return wrapper  # type: ignore[return-value]
 
 
+# ------------------------------------------------------------------------------------------
+# outputs: '-' is stdout; symlinks and devices are written through, regular files atomically
+# ------------------------------------------------------------------------------------------
+STDOUT_NAMES = ("-", "/dev/stdout", "/dev/fd/1", "/proc/self/fd/1")
+
+
+def write_output(path: str | Path, data: str | bytes) -> str:
+    """Write ``data`` to ``path`` and return where it went (for the "wrote ..." line).
+
+    ``-`` (and ``/dev/stdout``) writes to this process's stdout, wherever the shell sent it.
+    A symlink is followed and its target written (the link stays a
+    link); a character device, FIFO or socket (``/dev/stdout``, a pipe) is opened and written
+    in place; a regular file is replaced atomically (temporary file in the same folder, then
+    rename), so a failure never leaves it half-written.
+    """
+    raw = data.encode() if isinstance(data, str) else data
+    if str(path) in STDOUT_NAMES:
+        sys.stdout.flush()
+        sys.stdout.buffer.write(raw)
+        sys.stdout.buffer.flush()
+        return "stdout"
+    p = Path(path)
+    try:
+        mode = p.stat().st_mode  # follows symlinks
+    except FileNotFoundError:
+        mode = None
+    except OSError as exc:
+        raise InputError(str(p), f"cannot write: {exc.strerror}") from None
+    if mode is not None and stat.S_ISDIR(mode):
+        raise InputError(str(p), "is a folder: expected a file name")
+    special = str(p.absolute()).startswith(("/dev/", "/proc/"))
+    if special or (mode is not None and not stat.S_ISREG(mode)):
+        # a device, pipe or /dev/stdout: no rename possible (and a rename would detach the file
+        # a shell redirected stdout to), so write through
+        try:
+            with open(p, "ab") as fh:
+                fh.write(raw)
+        except OSError as exc:
+            raise InputError(str(p), f"cannot write: {exc.strerror}") from None
+        return str(p)
+    target = Path(os.path.realpath(p))  # a symlink's target is replaced, the link stays
+    try:
+        target.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.", suffix=".part")
+    except OSError as exc:
+        raise InputError(str(p), f"cannot write: {exc.strerror}") from None
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            fh.write(raw)
+        old = mode if mode is not None else 0o666 & ~_umask()
+        os.chmod(tmp, stat.S_IMODE(old))
+        os.replace(tmp, target)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return str(p)
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+# ------------------------------------------------------------------------------------------
+# progress: a bar on stderr when it is a terminal (and not -q)
+# ------------------------------------------------------------------------------------------
+@contextlib.contextmanager
+def progress_bar(description: str, total: float | None) -> Iterator[Callable[..., None]]:
+    """A rich progress bar on stderr; yields ``advance(steps=1, description=None)``.
+
+    ``total=None`` shows a spinner with the elapsed time (steps of unknown length).  Off when
+    stderr is not a terminal or with ``-q``, so logs and pipes get plain lines only.
+    """
+    from rich.progress import (
+        BarColumn,
+        MofNCompleteColumn,
+        Progress,
+        SpinnerColumn,
+        TextColumn,
+        TimeElapsedColumn,
+    )
+
+    columns = [SpinnerColumn(), TextColumn("{task.description}")]
+    if total is not None:
+        columns += [BarColumn(), MofNCompleteColumn()]
+    columns.append(TimeElapsedColumn())
+    disable = quiet() or not err_console.is_terminal
+    with Progress(*columns, console=err_console, transient=True, disable=disable) as bar:
+        task = bar.add_task(description, total=total)
+
+        def advance(steps: float = 1, description: str | None = None) -> None:
+            bar.update(task, advance=steps, description=description or bar.tasks[0].description)
+
+        yield advance
+
+
+# ------------------------------------------------------------------------------------------
+# global options
+# ------------------------------------------------------------------------------------------
+def _version(value: bool) -> None:
+    if value:
+        from sideslip import __version__
+
+        console.print(f"sideslip {__version__}", highlight=False)
+        raise typer.Exit()
+
+
 @app.callback()
 def _main(
     debug: Annotated[bool, typer.Option("--debug", help="Show tracebacks on errors.")] = False,
+    quiet_: Annotated[
+        bool, typer.Option("-q", "--quiet", help="Only results and errors (no progress, no notes).")
+    ] = False,
+    verbose: Annotated[bool, typer.Option("-v", "--verbose", help="More detail on stderr.")] = False,
+    version: Annotated[
+        bool,
+        typer.Option("--version", callback=_version, is_eager=True, help="Print the version and exit."),
+    ] = False,
 ) -> None:
     _STATE["debug"] = debug
+    _STATE["quiet"] = quiet_
+    _STATE["verbose"] = verbose and not quiet_
 
 
 def main() -> None:

@@ -2,13 +2,12 @@
 
 from __future__ import annotations
 
-import time
 from pathlib import Path
 from typing import Annotated, Any
 
 import typer
 
-from sideslip.cli.app import app, console, guarded, say
+from sideslip.cli.app import app, guarded
 from sideslip.errors import InputError
 
 
@@ -31,20 +30,21 @@ def settings_from_cli(config: Path | None, assignments: list[str] | None) -> dic
     return resolve_settings(merged, "--set" if assignments else str(config))
 
 
-def run_methods(
+def run_estimates(
     drive: Any,
     vehicle: Any,
     names: list[str] | None,
     quiet: bool = False,
     settings: dict[str, Any] | None = None,
-) -> list[Any]:
-    """Run the named methods (or all the drive allows), reporting skipped ones; returns estimates.
+) -> Any:
+    """Run the named methods (or all the drive allows), reporting skipped ones, with a progress
+    bar; returns :class:`~sideslip.estimate.Estimates` (estimates and skipped reasons).
 
     ``settings``: method name -> settings object (see :func:`settings_from_cli`).
     """
-    from sideslip.methods.registry import all_methods, run_method, why_not
-
-    settings = settings or {}
+    from sideslip.api import estimate
+    from sideslip.cli.app import note, progress_bar
+    from sideslip.methods.registry import all_methods
 
     registry = all_methods()
     if names:
@@ -53,26 +53,32 @@ def run_methods(
             raise InputError(
                 "--method", f"unknown method '{unknown[0]}': expected one of {', '.join(registry)}"
             )
-        chosen = [registry[n] for n in names]
-    else:
-        chosen = list(registry.values())
-    estimates = []
-    for m in chosen:
-        reason = why_not(m, drive, vehicle)
-        if reason is not None:
-            if names:
-                run_method(m, drive, vehicle)  # raises the precise one-line error
+    total = len(names) if names else len(registry)
+    with progress_bar("methods", total) as advance:
+
+        def tell(event: str, name: str, i: int, n: int, detail: str) -> None:
+            if event == "start":
+                advance(0, f"{name} ({i + 1}/{n})")
+                return
+            advance(1)
             if not quiet:
-                say(f"skipped {m.name}: {reason}")
-            continue
-        start = time.perf_counter()
-        est = run_method(m, drive, vehicle, settings.get(m.name))
-        if not quiet:
-            say(f"ran {m.name} ({time.perf_counter() - start:.2f} s)")
-        estimates.append(est)
-    if not estimates:
+                note(f"skipped {name}: {detail}" if event == "skip" else f"ran {name} ({detail} s)")
+
+        result = estimate(drive, vehicle, names or None, settings, progress=tell)
+    if not len(result):
         raise InputError(drive.path, "no method can run on this drive (see the skipped reasons above)")
-    return estimates
+    return result
+
+
+def run_methods(
+    drive: Any,
+    vehicle: Any,
+    names: list[str] | None,
+    quiet: bool = False,
+    settings: dict[str, Any] | None = None,
+) -> list[Any]:
+    """:func:`run_estimates` as a list of estimates (skipped reasons only reported)."""
+    return list(run_estimates(drive, vehicle, names, quiet, settings))
 
 
 @app.command("estimate")
@@ -91,6 +97,16 @@ def estimate_cmd(
     config: Annotated[
         Path | None, typer.Option("--config", help="Settings TOML: one [method] table of FIELD = VALUE.")
     ] = None,
+    heading_convention: Annotated[
+        str,
+        typer.Option(
+            "--heading-convention",
+            help="Also write M.heading_deg with north-cw-deg (from North, clockwise, degrees).",
+        ),
+    ] = "enu-ccw-rad",
+    geodetic: Annotated[
+        bool, typer.Option("--geodetic", help="Also write M.lat, M.lon (deg) from the drive's origin.")
+    ] = False,
 ) -> None:
     """Run estimation methods on a drive and write their estimates (+ .params.json)."""
     from sideslip.drive import load_drive
@@ -99,9 +115,24 @@ def estimate_cmd(
 
     if out.suffix.lower() not in (".csv", ".parquet", ".pq"):
         raise InputError(str(out), "expected an output path ending in .csv or .parquet")
+    from sideslip.cli.app import note
+    from sideslip.conventions import HEADING_CONVENTIONS, with_conventions
+
+    if heading_convention not in HEADING_CONVENTIONS:
+        raise InputError(
+            "--heading-convention",
+            f"'{heading_convention}': expected one of {', '.join(HEADING_CONVENTIONS)}",
+        )
     chosen_settings = settings_from_cli(config, set_)
     veh = load_vehicle(vehicle)
     drive = load_drive(drive_path)
-    estimates = run_methods(drive, veh, method, settings=chosen_settings)
-    params = save_estimates(drive.t, estimates, out, {"drive": str(drive_path), "vehicle": vehicle})
-    console.print(f"wrote {out} ({len(estimates)} methods) and {params}")
+    if geodetic:
+        from sideslip.conventions import drive_origin
+
+        drive_origin(drive)  # fails before any method runs
+    result = run_estimates(drive, veh, method, settings=chosen_settings)
+    estimates = with_conventions(drive, list(result), heading_convention, geodetic)  # type: ignore[arg-type]
+    params = save_estimates(
+        drive.t, estimates, out, {"drive": str(drive_path), "vehicle": vehicle}, result.skipped
+    )
+    note(f"wrote {out} ({len(estimates)} methods) and {params}")
