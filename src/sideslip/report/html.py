@@ -1,257 +1,89 @@
-"""Self-contained HTML report: metrics, sideslip/roll/yaw against the reference, trajectory,
-uncertainty calibration, identified parameters.  One file, plotly.js inlined, no network."""
+"""Self-contained HTML report: one offline file (plotly.js embedded once), readable on a phone.
+
+Sections: summary, metrics, uncertainty calibration, sideslip (with each method's 1σ band and
+an error histogram per method), roll and bank, heading, the trajectory on a map-like ENU plot,
+speed with GNSS availability, skipped methods, identified parameters, and a foot with version,
+date, command and input files.  Plotted series are decimated (min/max per bucket, so a 1 h
+drive stays a few MB); the metrics use every row.
+"""
 
 from __future__ import annotations
 
 import html
 import json
-import math
-from collections.abc import Mapping
+import sys
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-import plotly.graph_objects as go
+import plotly.io as pio
 from plotly.offline import get_plotlyjs
 
 from sideslip.drive import COLUMNS, Drive, _atomic_write
-from sideslip.evaluate import METRIC_NAMES, SPEED_GATE, evaluate_all, forward_speed
-from sideslip.frames import wrap_angle
+from sideslip.estimate import SKIPPED_KEY
+from sideslip.evaluate import SPEED_GATE, evaluate_all
+from sideslip.report import figures as fg
+from sideslip.report.series import SHOWN, Ranking, calibration, gnss_outages, rank
+from sideslip.report.tables import calibration_html, footer_html, metrics_html, params_html, skipped_html
 
-MAX_POINTS = 2500  # per trace: keeps the file small and the page responsive
-PALETTE = (
-    "#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2", "#7f7f7f",
-    "#bcbd22", "#17becf", "#393b79", "#637939", "#8c6d31", "#843c39", "#7b4173", "#3182bd",
-)  # fmt: skip
-
-Series = Mapping[str, Mapping[str, np.ndarray]]
-
-
-def _stride(n: int) -> slice:
-    return slice(None, None, max(1, math.ceil(n / MAX_POINTS)))
-
-
-def _figure(title: str, ytitle: str, xtitle: str = "time (s)") -> go.Figure:
-    fig = go.Figure()
-    fig.update_layout(
-        title=title,
-        xaxis_title=xtitle,
-        yaxis_title=ytitle,
-        template="plotly_white",
-        height=420,
-        margin={"l": 60, "r": 20, "t": 50, "b": 50},
-        legend={"orientation": "h", "y": -0.2},
-    )
-    return fig
-
-
-def _colour(i: int) -> str:
-    return PALETTE[i % len(PALETTE)]
-
-
-SHOWN = 5  # methods drawn by default (the best by beta RMSE); the others: click the legend
-
-
-def _visible(rank: int) -> bool | str:
-    return True if rank < SHOWN else "legendonly"
-
-
-def _robust_range(values: list[np.ndarray], pad: float) -> list[float] | None:
-    """A y-range holding the bulk of the shown curves, so that one drifting method (the
-    open-loop baseline) does not flatten the others; zoom out to see all."""
-    finite = [v[np.isfinite(v)] for v in values]
-    finite = [v for v in finite if v.size]
-    if not finite:
-        return None
-    lo = float(np.median([np.percentile(v, 0.5) for v in finite]))
-    hi = float(np.median([np.percentile(v, 99.5) for v in finite]))
-    span = max(hi - lo, pad)
-    return [lo - 0.25 * span, hi + 0.25 * span]
-
-
-def _time_plot(
-    drive: Drive,
-    est: Series,
-    order: list[str],
-    key: str,
-    ref: str | None,
-    title: str,
-    scale: float,
-) -> go.Figure | None:
-    methods = [m for m in order if key in est[m]]
-    if not methods:
-        return None
-    fig = _figure(title, "deg")
-    s = _stride(len(drive))
-    t = drive.t[s]
-    shown = []
-    if ref and ref in drive:
-        y_ref = drive[ref][s] * scale
-        fig.add_scatter(x=t, y=y_ref, name="reference", line={"color": "black", "width": 3})
-        shown.append(y_ref)
-    for i, m in enumerate(methods):
-        y = est[m][key][s] * scale
-        fig.add_scatter(
-            x=t, y=y, name=m, line={"color": _colour(i), "width": 1.5}, visible=_visible(i)
-        )
-        if i < SHOWN:
-            shown.append(y)
-    rng = _robust_range(shown, 0.5)
-    if rng:
-        fig.update_yaxes(range=rng)
-    return fig
-
-
-def _error_plot(
-    drive: Drive, est: Series, order: list[str], key: str, ref: str, title: str
-) -> go.Figure | None:
-    methods = [m for m in order if key in est[m]]
-    if not methods or ref not in drive:
-        return None
-    fig = _figure(title, "error (deg)")
-    s = _stride(len(drive))
-    t = drive.t[s]
-    gate = forward_speed(drive) > SPEED_GATE
-    shown = []
-    for i, m in enumerate(methods):
-        err = np.degrees(wrap_angle(est[m][key] - drive[ref]))
-        err = np.where(gate, err, np.nan)[s]
-        fig.add_scatter(
-            x=t, y=err, name=m, line={"color": _colour(i), "width": 1.2},
-            visible=_visible(i), legendgroup=m,
-        )  # fmt: skip
-        if i < SHOWN:
-            shown.append(err)
-        std = est[m].get(f"{key}_std")
-        if std is not None:
-            band = 2 * np.degrees(std[s])
-            fig.add_scatter(
-                x=np.concatenate([t, t[::-1]]),
-                y=np.concatenate([band, -band[::-1]]),
-                fill="toself",
-                fillcolor=_colour(i),
-                opacity=0.15,
-                line={"width": 0},
-                name=f"{m} ±2σ",
-                hoverinfo="skip",
-                visible=_visible(i),
-                legendgroup=m,
-                showlegend=False,
-            )
-    rng = _robust_range(shown, 0.2)
-    if rng:
-        fig.update_yaxes(range=rng)
-    return fig
-
-
-def _map_plot(drive: Drive, est: Series, order: list[str]) -> go.Figure | None:
-    methods = [m for m in order if "e" in est[m] and "n" in est[m]]
-    has_ref = "ref_e" in drive and "ref_n" in drive
-    has_gnss = "gnss_e" in drive and "gnss_n" in drive
-    if not (methods or has_ref or has_gnss):
-        return None
-    fig = _figure("Trajectory (ENU)", "north (m)", "east (m)")
-    fig.update_layout(height=620)
-    fig.update_yaxes(scaleanchor="x", scaleratio=1)
-    s = _stride(len(drive))
-    if has_ref:
-        fig.add_scatter(
-            x=drive["ref_e"][s], y=drive["ref_n"][s], name="reference",
-            line={"color": "black", "width": 3},
-        )  # fmt: skip
-    if has_gnss:
-        ok = np.isfinite(drive["gnss_e"])
-        ge, gn = drive["gnss_e"][ok], drive["gnss_n"][ok]
-        gs = _stride(ge.size)
-        fig.add_scatter(
-            x=ge[gs], y=gn[gs], mode="markers", name="GNSS fixes",
-            marker={"size": 3, "color": "#999"},
-        )  # fmt: skip
-    for i, m in enumerate(methods):
-        fig.add_scatter(
-            x=est[m]["e"][s], y=est[m]["n"][s], name=m,
-            line={"color": _colour(i), "width": 1.5}, visible=_visible(i),
-        )  # fmt: skip
-    return fig
-
-
-def _speed_plot(drive: Drive) -> go.Figure:
-    from sideslip.signals import vehicle_speed
-
-    fig = _figure("Speed and GNSS availability", "m/s")
-    s = _stride(len(drive))
-    fig.add_scatter(x=drive.t[s], y=vehicle_speed(drive)[s], name="measured speed", line={"color": "#1f77b4"})
-    if "gnss_e" in drive:
-        rows = np.flatnonzero(np.isfinite(drive["gnss_e"]))
-        if rows.size > 1:
-            gaps = np.flatnonzero(np.diff(drive.t[rows]) > 5 * np.median(np.diff(drive.t[rows])))
-            for g in gaps:
-                fig.add_vrect(
-                    x0=drive.t[rows[g]],
-                    x1=drive.t[rows[g + 1]],
-                    fillcolor="red",
-                    opacity=0.12,
-                    line_width=0,
-                    annotation_text="GNSS gap",
-                    annotation_position="top left",
-                )
-    return fig
-
-
-def _coverage(drive: Drive, est: Series) -> list[tuple[str, float, float, int]]:
-    """(method, share of |beta error| within 1 sigma, within 2 sigma, samples)."""
-    out: list[tuple[str, float, float, int]] = []
-    if "ref_beta" not in drive:
-        return out
-    gate = forward_speed(drive) > SPEED_GATE
-    for m, series in est.items():
-        if not m or "beta_std" not in series:
-            continue
-        ok = gate & np.isfinite(drive["ref_beta"]) & (series["beta_std"] > 0)
-        if not ok.any():
-            continue
-        z = np.abs(wrap_angle(series["beta"][ok] - drive["ref_beta"][ok])) / series["beta_std"][ok]
-        out.append((m, float(np.mean(z < 1)), float(np.mean(z < 2)), int(ok.sum())))
-    return out
-
-
-def _metrics_html(results: dict[str, dict[str, float]]) -> str:
-    names = [k for k in METRIC_NAMES if any(k in r for r in results.values())]
-    extra = sorted({k for r in results.values() for k in r} - set(METRIC_NAMES))
-    cols = names + extra
-    if not cols:
-        return "<p>No reference columns: no metrics.</p>"
-    best: dict[str, float] = {}
-    for c in cols:
-        vals = [abs(r[c]) for r in results.values() if c in r and math.isfinite(r[c])]
-        if vals:
-            best[c] = min(vals)
-    head = "".join(f"<th>{html.escape(c)}</th>" for c in cols)
-    body = []
-    order = sorted(results, key=lambda m: results[m].get("beta_rmse_deg", math.inf))
-    for m in order:
-        r = results[m]
-        cells = []
-        for c in cols:
-            if c not in r:
-                cells.append("<td>–</td>")
-                continue
-            cls = ' class="best"' if c in best and abs(r[c]) == best[c] and len(results) > 1 else ""
-            cells.append(f"<td{cls}>{r[c]:.3f}</td>")
-        body.append(f"<tr><th>{html.escape(m)}</th>{''.join(cells)}</tr>")
-    return f"<table><tr><th>method</th>{head}</tr>{''.join(body)}</table>"
-
+Series = Mapping[str, Mapping[str, Any]]
+esc = html.escape
 
 CSS = """
-body{font-family:system-ui,-apple-system,Segoe UI,Roboto,sans-serif;margin:2em auto;max-width:1200px;
-color:#222;padding:0 1em}
-h1{margin-bottom:0.2em} .sub{color:#666;margin-top:0}
-table{border-collapse:collapse;font-size:13px;margin:1em 0;display:block;overflow-x:auto}
-th,td{border:1px solid #ddd;padding:4px 8px;text-align:right} th{background:#f5f5f5}
-tr th:first-child{text-align:left} td.best{background:#d8f0d8;font-weight:600}
-details{margin:0.5em 0} pre{background:#f8f8f8;padding:0.8em;overflow-x:auto;font-size:12px}
-.card{border:1px solid #eee;border-radius:8px;padding:0.5em 1em;margin:1em 0}
+*{box-sizing:border-box}
+body{font-family:system-ui,-apple-system,Segoe UI,Roboto,sans-serif;margin:0 auto;max-width:1200px;
+color:#222;padding:0.5em 1em;line-height:1.4}
+h1{margin:0.3em 0 0.1em;font-size:1.6em} h2{font-size:1.2em;margin:0.4em 0} .sub{color:#666;margin-top:0}
+.scroll{overflow-x:auto;max-width:100%}
+table{border-collapse:collapse;font-size:13px;margin:0.6em 0}
+th,td{border:1px solid #ddd;padding:3px 7px;text-align:right;white-space:nowrap}
+th{background:#f5f5f5} tr th:first-child{text-align:left} td.left{text-align:left;white-space:normal}
+th.left{text-align:left} td.best{background:#d8f0d8;font-weight:600}
+td.good{background:#e3f4e3;text-align:left}
+td.warn{background:#fdf0d5;text-align:left} .pm{color:#666}
+details{margin:0.4em 0} summary{cursor:pointer}
+.card{border:1px solid #e5e5e5;border-radius:8px;padding:0.4em 1em;margin:1em 0;background:#fff}
+.note{background:#fff7e0;border-left:4px solid #f0b400;padding:0.5em 0.8em}
+.plot{width:100%;min-height:300px;margin:0.5em 0}
+footer{color:#666;font-size:12px;border-top:1px solid #ddd;margin-top:2em;padding-top:0.5em}
+code{font-size:12px;word-break:break-all}
+#js-errors{color:#b00;white-space:pre-wrap}
+@media (max-width:640px){body{padding:0.3em 0.5em} h1{font-size:1.25em} table{font-size:12px}
+.card{padding:0.3em 0.6em} .plot{min-height:260px}}
 """
+
+# Draw every figure; record failures in the page so a headless browser (and a reader) sees them.
+SCRIPT = """
+(function(){
+  var errs=document.getElementById('js-errors');
+  function fail(msg){errs.textContent+=msg+'\\n';document.body.setAttribute('data-js-errors','1');}
+  window.addEventListener('error',function(e){fail('error: '+e.message);});
+  var figs=JSON.parse(document.getElementById('figure-data').textContent);
+  var done=0;
+  figs.forEach(function(f){
+    try{Plotly.newPlot(f.id,f.fig.data,f.fig.layout,{responsive:true,displaylogo:false})
+      .then(function(){done+=1;document.body.setAttribute('data-plots-rendered',String(done));},
+            function(e){fail('plot '+f.id+': '+e);});}
+    catch(e){fail('plot '+f.id+': '+e);}
+  });
+  document.body.setAttribute('data-plots-expected',String(figs.length));
+})();
+"""
+
+
+def _ranking_note(ranking: Ranking, what: str) -> str:
+    if ranking.by is None:
+        shown = ", ".join(sorted(ranking.shown))
+        return (
+            f'<p class="note">This drive has no {what} reference: methods are <b>not ranked</b> '
+            f"(listed alphabetically).  Shown by default: {esc(shown)}; click a name in a legend to "
+            "show any other.</p>"
+        )
+    return (
+        f"<p>Shown by default: the {SHOWN} most accurate by {esc(ranking.by)} "
+        f"({esc(', '.join(m for m in ranking.order if m in ranking.shown))}), each with its own "
+        "1σ band; click a name in a legend to show any other, double-click a plot to zoom out.</p>"
+    )
 
 
 def render_report(
@@ -259,79 +91,128 @@ def render_report(
     est: Series,
     params: Mapping[str, Any] | None = None,
     title: str | None = None,
+    command: str | None = None,
+    inputs: Sequence[str | Path] = (),
+    progress: Callable[[str], None] | None = None,
 ) -> str:
-    """The report as one HTML string."""
-    results = evaluate_all(drive, {m: s for m, s in est.items() if m})
+    """The report as one HTML string.
+
+    ``params``: the estimate's params JSON (method -> identified values, and ``"_skipped"``:
+    method -> why it did not run).  ``command``/``inputs`` go to the foot of the page.
+    ``progress`` is called with the name of each step.
+    """
+    tell = progress or (lambda _step: None)
+    params = dict(params or {})
+    skipped = params.pop(SKIPPED_KEY, {}) or {}
+    est = {m: s for m, s in est.items() if m}
+    tell("metrics")
+    results = evaluate_all(drive, est)
     duration = float(drive.t[-1] - drive.t[0])
     meta = dict(drive.meta)
     scenario = meta.get("scenario") or meta.get("source") or Path(drive.path).name
     title = title or f"sideslip report — {scenario}"
-    methods = [m for m in est if m]
-    # plots list methods best first (beta RMSE, else roll RMSE), the rest keep their order
-    order = sorted(
-        methods,
-        key=lambda m: (
-            results.get(m, {}).get("beta_rmse_deg", math.inf),
-            results.get(m, {}).get("roll_rmse_deg", math.inf),
-        ),
-    )
+    methods = list(est)
+    beta_rank = rank(methods, results, "beta_rmse_deg")
+    roll_rank = rank(methods, results, "roll_rmse_deg")
+    yaw_rank = rank(methods, results, "yaw_rmse_deg")
+    pos_rank = rank(methods, results, "pos_rmse_m")
+    outages = gnss_outages(drive)
     sensors = [c for c in COLUMNS if c != "t" and not c.startswith("ref_") and c in drive]
+    refs = [c for c in COLUMNS if c.startswith("ref_") and c in drive]
+
     parts = [
-        f"<h1>{html.escape(title)}</h1>",
-        f'<p class="sub">{len(drive):,} rows, {duration:.1f} s; '
-        f"vehicle {html.escape(str(meta.get('vehicle', '?')))}; "
-        f"sensors: {html.escape(', '.join(sensors))}; "
-        f"methods: {html.escape(', '.join(methods))}.</p>",
+        f"<h1>{esc(title)}</h1>",
+        f'<p class="sub">{len(drive):,} rows, {duration:.1f} s (time axes from the drive\'s start, '
+        f"t = {drive.t[0]:g} s); vehicle {esc(str(meta.get('vehicle', '?')))}; sensors: "
+        f"{esc(', '.join(sensors))}; reference: {esc(', '.join(refs) or 'none')}; "
+        f"{len(methods)} methods ran, {len(skipped)} skipped; "
+        f"{len(outages)} GNSS outage{'s' if len(outages) != 1 else ''} (shaded red in every plot).</p>",
+    ]
+    if beta_rank.by is None:
+        parts.append(_ranking_note(beta_rank, "sideslip"))
+    else:
+        best = beta_rank.order[0]
+        parts.append(
+            f"<p>Most accurate sideslip on this drive: <b>{esc(best)}</b> "
+            f"({results[best]['beta_rmse_deg']:.3f}° RMS error above {SPEED_GATE:g} m/s).</p>"
+        )
+    parts += [
         '<div class="card"><h2>Metrics</h2>',
-        f"<p>Errors against the reference on rows faster than {SPEED_GATE:g} m/s; "
-        "best in each column in green.</p>",
-        _metrics_html(results),
+        f"<p>Errors against the reference on rows faster than {SPEED_GATE:g} m/s, every row "
+        "counted; best in each column in green.</p>",
+        metrics_html(results, beta_rank.order if beta_rank.by else sorted(results)),
         "</div>",
     ]
-    cov = _coverage(drive, est)
-    if cov:
-        rows = "".join(
-            f"<tr><th>{html.escape(m)}</th><td>{a:.1%}</td><td>{b:.1%}</td><td>{n:,}</td></tr>"
-            for m, a, b, n in cov
-        )
-        parts.append(
-            '<div class="card"><h2>Uncertainty calibration</h2><p>Share of sideslip errors inside the '
-            "method's own 1σ and 2σ (a calibrated Gaussian estimate gives 68.3 % and 95.4 %).</p>"
-            "<table><tr><th>method</th><th>|e| &lt; 1σ</th><th>|e| &lt; 2σ</th><th>samples</th></tr>"
-            f"{rows}</table></div>"
-        )
-    deg = math.degrees(1.0)
-    beta_err = "Sideslip error (±2σ band where the method gives one)"
-    figs = [
-        _time_plot(drive, est, order, "beta", "ref_beta", "Sideslip angle β", deg),
-        _error_plot(drive, est, order, "beta", "ref_beta", beta_err),
-        _time_plot(drive, est, order, "roll", "ref_roll", "Roll angle (body to horizontal)", deg),
-        _time_plot(drive, est, order, "bank", "ref_bank", "Road bank angle", deg),
-        _error_plot(drive, est, order, "yaw", "ref_yaw", "Yaw (heading) error"),
-        _map_plot(drive, est, order),
-        _speed_plot(drive),
-    ]
-    parts.append(
-        f"<p>Plots show the {SHOWN} most accurate methods; click a name in a legend to show "
-        "or hide any other.  Double-click a plot to zoom out to every curve.</p>"
-    )
-    for fig in figs:
-        if fig is not None:
-            parts.append(fig.to_html(full_html=False, include_plotlyjs=False, config={"responsive": True}))
-    if params:
-        parts.append('<div class="card"><h2>Identified parameters and diagnostics</h2>')
-        for m, p in params.items():
-            text = html.escape(json.dumps(p, indent=2, default=str))
-            parts.append(f"<details><summary>{html.escape(m)}</summary><pre>{text}</pre></details>")
+    cal = calibration(drive, est)
+    if cal:
+        parts += ['<div class="card"><h2>Uncertainty calibration (sideslip)</h2>', calibration_html(cal)]
         parts.append("</div>")
+
+    tell("figures")
+    o = outages
+    yaw_fig = (
+        fg.error_plot(drive, est, yaw_rank, "yaw", "ref_yaw", "Yaw (heading) error", o)
+        if "ref_yaw" in drive
+        else fg.time_plot(drive, est, yaw_rank, "yaw", None, "Yaw from East, counter-clockwise", o)
+    )
+    sections: list[tuple[str, str, list[Any]]] = [
+        (
+            "Sideslip angle β",
+            _ranking_note(beta_rank, "sideslip"),
+            [
+                fg.time_plot(drive, est, beta_rank, "beta", "ref_beta", "Sideslip angle β (±1σ bands)", o),
+                fg.error_histogram(drive, est, beta_rank, "beta", "ref_beta", "β error distribution"),
+                fg.error_plot(drive, est, beta_rank, "beta", "ref_beta", "β error over time (±1σ)", o),
+            ],
+        ),
+        (
+            "Roll and road bank",
+            _ranking_note(roll_rank, "roll"),
+            [
+                fg.time_plot(drive, est, roll_rank, "roll", "ref_roll", "Roll angle (body to horizontal)", o),
+                fg.time_plot(drive, est, roll_rank, "bank", "ref_bank", "Road bank angle", o),
+            ],
+        ),
+        ("Heading", "", [yaw_fig]),
+        ("Trajectory", "", [fg.map_plot(drive, est, pos_rank, o)]),
+        ("Speed", "", [fg.speed_plot(drive, o)]),
+    ]
+    figs: list[dict[str, Any]] = []
+    for heading, note, section_figs in sections:
+        drawn = [f for f in section_figs if f is not None]
+        if not drawn:
+            continue
+        parts.append(f'<div class="card"><h2>{esc(heading)}</h2>{note}')
+        for fig in drawn:
+            fid = f"plot-{len(figs)}"
+            figs.append({"id": fid, "fig": json.loads(pio.to_json(fig, validate=False))})
+            parts.append(f'<div class="plot" id="{fid}"></div>')
+        parts.append("</div>")
+    parts.append(skipped_html(skipped))
+    parts.append(params_html(params, beta_rank.order))
+    parts.append(footer_html(command, inputs))
+    tell("page")
+    data = json.dumps(figs, separators=(",", ":")).replace("</", "<\\/")
     return (
-        f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{html.escape(title)}</title>"
-        f"<style>{CSS}</style><script>{get_plotlyjs()}</script></head><body>{''.join(parts)}"
-        "<p class='sub'>Generated by sideslip.</p></body></html>"
+        "<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'>"
+        "<meta name='viewport' content='width=device-width, initial-scale=1'>"
+        f"<title>{esc(title)}</title><style>{CSS}</style><script>{get_plotlyjs()}</script></head>"
+        f"<body>{''.join(parts)}<pre id='js-errors'></pre>"
+        f"<script type='application/json' id='figure-data'>{data}</script>"
+        f"<script>{SCRIPT}</script></body></html>"
     )
 
 
-def write_report(drive: Drive, est: Series, out: str | Path, params: Mapping[str, Any] | None = None) -> None:
-    """Write the report atomically to ``out`` (HTML)."""
-    text = render_report(drive, est, params)
+def write_report(
+    drive: Drive,
+    est: Series,
+    out: str | Path,
+    params: Mapping[str, Any] | None = None,
+    command: str | None = None,
+    inputs: Sequence[str | Path] = (),
+    progress: Callable[[str], None] | None = None,
+) -> None:
+    """Write the report atomically to ``out`` (HTML); ``command`` defaults to this process's."""
+    cmd = command if command is not None else " ".join(["sideslip", *sys.argv[1:]])
+    text = render_report(drive, est, params, command=cmd, inputs=inputs, progress=progress)
     _atomic_write(Path(out), lambda tmp: tmp.write_text(text, encoding="utf-8"))
