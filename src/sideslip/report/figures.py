@@ -72,7 +72,7 @@ def shade_outages(fig: go.Figure, outages: Sequence[tuple[float, float]]) -> Non
         )  # fmt: skip
 
 
-def _robust_range(values: list[np.ndarray], pad: float) -> list[float] | None:
+def robust_range(values: list[np.ndarray], pad: float) -> list[float] | None:
     """A y-range holding the bulk of the shown curves, so that one drifting method does not
     flatten the others (double-click to see all)."""
     finite = [v[np.isfinite(v)] for v in values]
@@ -140,7 +140,7 @@ def time_plot(
         if vis is True:
             shown.append(yd)
     shade_outages(fig, outages)
-    rng = _robust_range(shown, 0.5)
+    rng = robust_range(shown, 0.5)
     if rng:
         fig.update_yaxes(range=rng)
     return fig
@@ -179,7 +179,7 @@ def error_plot(
         if vis is True:
             shown.append(ed)
     shade_outages(fig, outages)
-    rng = _robust_range(shown, 0.2)
+    rng = robust_range(shown, 0.2)
     if rng:
         fig.update_yaxes(range=rng)
     return fig
