@@ -62,7 +62,9 @@ SCRIPT = """
   var done=0;
   figs.forEach(function(f){
     try{Plotly.newPlot(f.id,f.fig.data,f.fig.layout,{responsive:true,displaylogo:false})
-      .then(function(){done+=1;document.body.setAttribute('data-plots-rendered',String(done));},
+      .then(function(){done+=1;document.body.setAttribute('data-plots-rendered',String(done));
+        var d=document.documentElement;  // for tests on narrow screens: no sideways scrolling
+        document.body.setAttribute('data-overflow-x',String(Math.max(0,d.scrollWidth-d.clientWidth)));},
             function(e){fail('plot '+f.id+': '+e);});}
     catch(e){fail('plot '+f.id+': '+e);}
   });
