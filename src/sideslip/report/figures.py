@@ -14,6 +14,7 @@ from sideslip.drive import Drive
 from sideslip.evaluate import SPEED_GATE, forward_speed
 from sideslip.frames import wrap_angle
 from sideslip.report.series import (
+    BAND_POINTS,
     Ranking,
     Series,
     decimate,
@@ -125,7 +126,7 @@ def time_plot(
         vis = ranking.visible(m)
         std = est[m].get(f"{key}_std")
         if band and std is not None:
-            s = stride_indices(t.size)
+            s = stride_indices(t.size, BAND_POINTS)
             ts, up, lo = t[s], (y + std * DEG)[s], (y - std * DEG)[s]
             fig.add_scatter(
                 x=_f32(np.concatenate([ts, ts[::-1]])), y=_f32(np.concatenate([up, lo[::-1]])),
@@ -164,7 +165,7 @@ def error_plot(
         vis = ranking.visible(m)
         std = est[m].get(f"{key}_std")
         if std is not None:
-            s = stride_indices(t.size)
+            s = stride_indices(t.size, BAND_POINTS)
             ts, band = t[s], (std * DEG)[s]
             fig.add_scatter(
                 x=_f32(np.concatenate([ts, ts[::-1]])), y=_f32(np.concatenate([band, -band[::-1]])),

@@ -19,6 +19,7 @@ FloatArray = NDArray[np.float64]
 Series = Mapping[str, Mapping[str, np.ndarray]]
 
 BUCKETS = 1000  # min/max decimation: at most 2 x BUCKETS points per plotted trace
+BAND_POINTS = 800  # 1-sigma bands change slowly: a stride to this many points is enough
 SHOWN = 3  # methods drawn by default in each plot; the others are one legend click away
 DEFAULT_METHOD = "fused"  # shown by default when there is no reference to rank by
 SPARSE_SHARE = 0.5  # a reference with samples on fewer rows than this is drawn as markers
