@@ -20,6 +20,8 @@ FORMATS: dict[str, str] = {
     "CAN frames decoded with a DBC)",
     "mdf4": "an ASAM MDF4 file (.mf4), channels mapped by --map MAP.toml (optional raw CAN "
     "frames decoded with a DBC)",
+    "rosbag": "a ROS 1 .bag or ROS 2 bag folder (rosbags): sensor_msgs/Imu, NavSatFix, "
+    "TwistStamped topics and numeric fields of any message, mapped by --map MAP.toml",
 }
 
 
@@ -42,7 +44,12 @@ def convert(fmt: str, src: Path, vehicle: Vehicle | None, map_path: Path | None)
             vehicle = load_vehicle(name)
         return convert_comma2k19(src, vehicle)
     if map_path is None:
-        raise InputError(str(src), f"format {fmt!r} needs a channel map: expected --map MAP.toml")
+        raise InputError(str(src), f"format {fmt!r} needs a channel map: expected --map MAP.toml "
+                         f"(start from: sideslip convert --template {fmt})")
+    if fmt == "rosbag":
+        from sideslip.io.rosbag import convert_rosbag
+
+        return convert_rosbag(src, map_path)
     from sideslip.io.mapping import convert_mapped
 
     return convert_mapped(src, map_path, fmt)
