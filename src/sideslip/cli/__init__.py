@@ -4,7 +4,7 @@ One module per command (or family of commands); each registers itself on the sha
 ``app`` when imported here.
 """
 
-from sideslip.cli import batch, bench, convert, demo, estimate, evaluate, info, report, simulate
+from sideslip.cli import batch, bench, convert, demo, estimate, evaluate, info, report, simulate, vehicle
 from sideslip.cli.app import app, main
 
 __all__ = [
@@ -19,4 +19,5 @@ __all__ = [
     "main",
     "report",
     "simulate",
+    "vehicle",
 ]

@@ -9,8 +9,8 @@ from typing import Annotated
 
 import typer
 
-from sideslip.cli.app import app, console, guarded
-from sideslip.cli.estimate import run_methods
+from sideslip.cli.app import app, console, guarded, note, progress_bar, write_output
+from sideslip.cli.estimate import run_estimates
 from sideslip.cli.evaluate import metrics_table
 
 
@@ -23,30 +23,32 @@ def demo_cmd(
 ) -> None:
     """Simulate a built-in scenario, run every method, print metrics, write the report."""
     import sideslip.simulate as sim
-    from sideslip.drive import _atomic_write, save_drive
-    from sideslip.estimate import save_estimates
+    from sideslip.drive import save_drive
     from sideslip.evaluate import evaluate_all
+    from sideslip.report.html import write_report
     from sideslip.vehicle import load_vehicle
 
     start = time.perf_counter()
-    drive = sim.simulate(scenario, seed=seed)
+    with progress_bar(f"simulating {scenario}", None):
+        drive = sim.simulate(scenario, seed=seed)
     vehicle = load_vehicle(drive.meta["vehicle"])
     out_dir.mkdir(parents=True, exist_ok=True)
     drive_path = out_dir / f"{scenario}.parquet"
     save_drive(drive, drive_path)
-    console.print(f"simulated {scenario} ({drive.t[-1]:.0f} s, vehicle {vehicle.name}) -> {drive_path}")
-    estimates = run_methods(drive, vehicle, None)
+    note(f"simulated {scenario} ({drive.t[-1]:.0f} s, vehicle {vehicle.name}) -> {drive_path}")
+    result = run_estimates(drive, vehicle, None)
     est_path = out_dir / f"{scenario}_estimates.parquet"
-    save_estimates(drive.t, estimates, est_path, {"drive": str(drive_path), "vehicle": vehicle.name})
-    series = {e.method: dict(e.series) for e in estimates}
+    params_file = result.save(est_path, {"drive": str(drive_path), "vehicle": vehicle.name})
+    series = result.series()
     results = evaluate_all(drive, series)
     console.print(metrics_table(results, f"metrics on scenario '{scenario}'"))
-    _atomic_write(
-        out_dir / f"{scenario}_metrics.json", lambda tmp: tmp.write_text(json.dumps(results, indent=2))
-    )
-    from sideslip.report.html import write_report
-
+    write_output(out_dir / f"{scenario}_metrics.json", json.dumps(results, indent=2) + "\n")
     report = out_dir / f"{scenario}_report.html"
-    write_report(drive, {"": {"t": drive.t}, **series}, report, {e.method: dict(e.params) for e in estimates})
-    console.print(f"report: {report}")
-    console.print(f"done in {time.perf_counter() - start:.1f} s")
+    with progress_bar("report", None) as advance:
+        write_report(
+            drive, series, report, {**result.params, "_skipped": dict(result.skipped)},
+            inputs=[drive_path, est_path, params_file],
+            progress=lambda step: advance(0, f"report: {step}"),
+        )  # fmt: skip
+    note(f"report: {report}")
+    note(f"done in {time.perf_counter() - start:.1f} s")

@@ -8,7 +8,7 @@ from typing import Annotated
 
 import typer
 
-from sideslip.cli.app import app, console, guarded
+from sideslip.cli.app import app, guarded, note, progress_bar
 
 
 @app.command("simulate")
@@ -24,13 +24,18 @@ def simulate_cmd(
     """Simulate a scenario and write a drive with reference columns."""
     import sideslip.simulate as sim
     from sideslip.drive import save_drive
+    from sideslip.errors import InputError
     from sideslip.vehicle import load_vehicle
 
+    if out.suffix.lower() not in (".csv", ".parquet", ".pq"):
+        raise InputError(str(out), "expected an output path ending in .csv or .parquet")
     veh = load_vehicle(vehicle) if vehicle else None
     start = time.perf_counter()
-    drive = sim.simulate(scenario, seed=seed, vehicle=veh)
-    save_drive(drive, out)
-    console.print(
+    with progress_bar(f"simulating {scenario}", None) as advance:
+        drive = sim.simulate(scenario, seed=seed, vehicle=veh)
+        advance(0, f"writing {out.name}")
+        save_drive(drive, out)
+    note(
         f"wrote {out}: {len(drive)} rows, {drive.t[-1] - drive.t[0]:.1f} s, "
         f"scenario {scenario}, seed {seed} ({time.perf_counter() - start:.1f} s)"
     )

@@ -25,6 +25,18 @@ FORMATS: dict[str, str] = {
 }
 
 
+TEMPLATES = ("csv", "mdf4", "rosbag")  # formats mapped by a MAP.toml: `convert --template FMT`
+
+
+def template(fmt: str) -> str:
+    """The commented example map of a mapped format (``sideslip convert --template FMT``)."""
+    from importlib import resources
+
+    if fmt not in TEMPLATES:
+        raise InputError("--template", f"'{fmt}': expected one of {', '.join(TEMPLATES)}")
+    return resources.files("sideslip.io").joinpath("templates", f"{fmt}.toml").read_text(encoding="utf-8")
+
+
 def convert(fmt: str, src: Path, vehicle: Vehicle | None, map_path: Path | None) -> Drive:
     """Turn an outside recording into a validated drive; bad input raises InputError."""
     if fmt not in FORMATS:

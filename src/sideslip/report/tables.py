@@ -117,7 +117,7 @@ SECTIONS = ("settings", "health")  # nested diagnostics shown folded under the m
 
 def params_html(params: Mapping[str, Any], order: Sequence[str]) -> str:
     """Identified parameters per method as a table: name, value, 1σ (from ``<name>_sigma``)."""
-    blocks = []
+    blocks: list[str] = []
     for m in [m for m in order if m in params] + sorted(set(params) - set(order) - {"_skipped"}):
         p = params[m]
         if not isinstance(p, Mapping) or not p:
