@@ -18,7 +18,7 @@ Conventions (written once, used everywhere in the package)
 Public API (imported lazily: ``import sideslip`` stays light)
 --------------------------------------------------------------
 ``load_drive``, ``load_vehicle``, ``simulate_drive``, ``estimate``, ``evaluate``,
-``methods``, ``Drive``, ``Vehicle``, ``Estimate``, ``Estimates``, ``InputError``; see
+``method_names``, ``Drive``, ``Vehicle``, ``Estimate``, ``Estimates``, ``InputError``; see
 :mod:`sideslip.api`.  ``sideslip.estimate`` and ``sideslip.evaluate`` are modules that can be
 called as the functions of the same name (see :mod:`sideslip._callable`).
 """
@@ -36,7 +36,7 @@ _LAZY = {
     "simulate_drive": "sideslip.api",
     "estimate": "sideslip.estimate",  # the module, callable as sideslip.api.estimate
     "evaluate": "sideslip.evaluate",  # the module, callable as sideslip.api.evaluate
-    "methods": "sideslip.api",
+    "method_names": "sideslip.api",
     "Drive": "sideslip.drive",
     "Vehicle": "sideslip.vehicle",
     "Estimate": "sideslip.estimate",
@@ -45,11 +45,11 @@ _LAZY = {
 }
 __all__ = [
     "Drive", "Estimate", "Estimates", "InputError", "Vehicle", "__version__", "estimate", "evaluate",
-    "load_drive", "load_vehicle", "methods", "simulate_drive",
+    "load_drive", "load_vehicle", "method_names", "simulate_drive",
 ]  # fmt: skip
 
 if TYPE_CHECKING:
-    from sideslip.api import load_drive, load_vehicle, methods, simulate_drive
+    from sideslip.api import load_drive, load_vehicle, method_names, simulate_drive
     from sideslip.drive import Drive
     from sideslip.errors import InputError
     from sideslip.estimate import Estimate, Estimates

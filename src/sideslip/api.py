@@ -53,7 +53,7 @@ def simulate_drive(scenario: str, seed: int = 0, vehicle: Vehicle | str | Path |
     return sim.simulate(scenario, seed=seed, vehicle=None if vehicle is None else load_vehicle(vehicle))
 
 
-def methods() -> list[str]:
+def method_names() -> list[str]:
     """Names of every registered method."""
     from sideslip.methods.registry import all_methods
 
