@@ -1,0 +1,84 @@
+"""`sideslip estimate` options for users of OxTS/VBOX tools, and skipped methods in the params."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pandas as pd
+from typer.testing import CliRunner
+
+from sideslip.cli import app
+from sideslip.conventions import heading_north_cw_deg
+from sideslip.frames import geodetic_to_enu
+from tests.helpers import CIRCLE
+
+ORIGIN = [48.78, 9.18, 250.0]
+
+
+def invoke(*args):
+    return CliRunner().invoke(app, [str(a) for a in args])
+
+
+def test_heading_convention_adds_heading_from_north_clockwise_in_degrees(tmp_path):
+    out = tmp_path / "e.csv"
+    res = invoke("estimate", CIRCLE, "--vehicle", "midsize_sedan", "--method", "kkf", "--method", "fused",
+                 "--heading-convention", "north-cw-deg", "--out", out)  # fmt: skip
+    assert res.exit_code == 0, res.output
+    frame = pd.read_csv(out)
+    for m in ("kkf", "fused"):
+        yaw = frame[f"{m}.yaw"].to_numpy()
+        heading = frame[f"{m}.heading_deg"].to_numpy()
+        assert np.all((heading >= 0) & (heading < 360))
+        # heading and yaw point the same way: (sin, cos) of heading = (cos, sin) of yaw
+        assert np.allclose(np.sin(np.radians(heading)), np.cos(yaw), atol=1e-9)
+        assert np.allclose(np.cos(np.radians(heading)), np.sin(yaw), atol=1e-9)
+    assert "fg_batch.heading_deg" not in frame.columns  # only where a method has a yaw
+    # East is 90 deg from North, North 0, South 180
+    assert heading_north_cw_deg(np.array([0.0, np.pi / 2, -np.pi / 2])).tolist() == [90.0, 0.0, 180.0]
+
+
+def test_geodetic_output_uses_the_drives_origin(tmp_path):
+    drive = tmp_path / "circle.csv"
+    drive.write_bytes(CIRCLE.read_bytes())
+    (tmp_path / "circle.meta.json").write_text(json.dumps({"origin": ORIGIN}))
+    out = tmp_path / "e.parquet"
+    res = invoke("estimate", drive, "--vehicle", "midsize_sedan", "--method", "fused", "--geodetic", "--out", out)
+    assert res.exit_code == 0, res.output
+    frame = pd.read_parquet(out)
+    lat, lon = frame["fused.lat"].to_numpy(), frame["fused.lon"].to_numpy()
+    assert abs(lat - ORIGIN[0]).max() < 0.01 and abs(lon - ORIGIN[1]).max() < 0.01  # a 60 m circle
+    enu = geodetic_to_enu(lat, lon, np.full(lat.size, ORIGIN[2]), tuple(ORIGIN))
+    # back to ENU: the estimate's own e, n within a millimetre (the round trip of the ellipsoid)
+    assert np.allclose(enu[:, 0], frame["fused.e"], atol=1e-3)
+    assert np.allclose(enu[:, 1], frame["fused.n"], atol=1e-3)
+
+
+def test_geodetic_output_without_an_origin_is_one_line_and_writes_nothing(tmp_path):
+    out = tmp_path / "e.parquet"
+    res = invoke("estimate", CIRCLE, "--vehicle", "midsize_sedan", "--geodetic", "--out", out)
+    assert res.exit_code == 2
+    assert res.stderr.strip() == (
+        f"error: {CIRCLE}: no ENU origin in the drive's metadata: expected origin = [lat, lon, h] "
+        "(degrees, m) in its .meta.json for geodetic output"
+    )
+    assert not out.exists()
+
+
+def test_bad_heading_convention_is_named():
+    res = invoke("estimate", CIRCLE, "--vehicle", "midsize_sedan", "--heading-convention", "north", "--out", "e.csv")
+    assert res.exit_code == 2
+    assert "--heading-convention: 'north': expected one of enu-ccw-rad, north-cw-deg" in res.stderr
+
+
+def test_skipped_methods_and_their_reasons_go_to_the_params(tmp_path):
+    frame = pd.read_csv(CIRCLE).drop(columns=["steer"])
+    drive = tmp_path / "nosteer.csv"
+    frame.to_csv(drive, index=False)
+    out = tmp_path / "e.parquet"
+    res = invoke("estimate", drive, "--vehicle", "midsize_sedan", "--out", out)
+    assert res.exit_code == 0, res.output
+    params = json.loads((tmp_path / "e.params.json").read_text())
+    assert params["_skipped"]["obs_bicycle"] == "drive lacks 'steer'"
+    assert "skipped obs_bicycle: drive lacks 'steer'" in res.stderr
+    assert "fused" in params and "obs_bicycle" not in params
