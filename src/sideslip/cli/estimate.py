@@ -43,7 +43,7 @@ def run_estimates(
     ``settings``: method name -> settings object (see :func:`settings_from_cli`).
     """
     from sideslip.api import estimate
-    from sideslip.cli.app import note, progress_bar
+    from sideslip.cli.app import detail, note, progress_bar
     from sideslip.methods.registry import all_methods
 
     registry = all_methods()
@@ -65,6 +65,9 @@ def run_estimates(
                 note(f"skipped {name}: {detail}" if event == "skip" else f"ran {name} ({detail} s)")
 
         result = estimate(drive, vehicle, names or None, settings, progress=tell)
+    for est in result:  # -v: what each method identified
+        nums = [(k, v) for k, v in est.params.items() if isinstance(v, int | float) and not isinstance(v, bool)]
+        detail(f"{est.method}: " + (", ".join(f"{k}={v:.4g}" for k, v in nums) or "no scalar params"))
     if not len(result):
         raise InputError(drive.path, "no method can run on this drive (see the skipped reasons above)")
     return result

@@ -10,7 +10,7 @@ from typing import Annotated
 
 import typer
 
-from sideslip.cli.app import app, guarded, note, progress_bar
+from sideslip.cli.app import app, guarded, note, progress_bar, write_output
 from sideslip.cli.evaluate import _check_same_time_base
 from sideslip.errors import InputError
 
@@ -48,14 +48,14 @@ def report_cmd(
     inputs = [drive_path, est_path] + ([pj] if params is not None else [])
     command = " ".join(["sideslip", *sys.argv[1:]])
     if out is not None:
-        from sideslip.report.html import write_report
+        from sideslip.report.html import render_report
 
         with progress_bar("report", None) as advance:
-            write_report(
-                drive, est, out, params, command=command, inputs=inputs,
+            text = render_report(
+                drive, est, params, command=command, inputs=inputs,
                 progress=lambda step: advance(0, f"report: {step}"),
             )  # fmt: skip
-        note(f"wrote {out}")
+        note(f"wrote {write_output(out, text)} ({len(text.encode()) / 1e6:.1f} MB)")
     if static is not None:
         from sideslip.report.static import write_static
 

@@ -158,6 +158,7 @@ def error_plot(
     fig = figure(title, "error (deg)")
     t = time_axis(drive)
     gate = forward_speed(drive) > SPEED_GATE
+    sparse_ref = is_sparse(drive[ref])
     shown = []
     for m in methods:
         i = ranking.colour_index.get(m, 0)
@@ -172,11 +173,15 @@ def error_plot(
                 fill="toself", fillcolor=_rgba(colour(i), 0.15), line={"width": 0}, name=f"{m} ±1σ",
                 hoverinfo="skip", visible=vis, legendgroup=m, showlegend=False,
             )  # fmt: skip
-        td, ed = decimate(t, err)
-        fig.add_scatter(
-            x=_f32(td), y=_f32(ed), name=m, line={"color": colour(i), "width": 1.2},
-            visible=vis, legendgroup=m,
-        )  # fmt: skip
+        if sparse_ref:  # errors exist only where the reference has a sample: markers
+            rows = np.flatnonzero(np.isfinite(err))
+            rows = rows[stride_indices(rows.size)]
+            td, ed = t[rows], err[rows]
+            style: dict[str, object] = {"mode": "markers", "marker": {"color": colour(i), "size": 3}}
+        else:
+            td, ed = decimate(t, err)
+            style = {"line": {"color": colour(i), "width": 1.2}}
+        fig.add_scatter(x=_f32(td), y=_f32(ed), name=m, visible=vis, legendgroup=m, **style)
         if vis is True:
             shown.append(ed)
     shade_outages(fig, outages)
