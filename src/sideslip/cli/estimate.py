@@ -66,7 +66,7 @@ def run_estimates(
 
         result = estimate(drive, vehicle, names or None, settings, progress=tell)
     for est in result:  # -v: what each method identified
-        nums = [(k, v) for k, v in est.params.items() if isinstance(v, int | float) and not isinstance(v, bool)]
+        nums = [(k, v) for k, v in est.params.items() if type(v) in (int, float)]
         detail(f"{est.method}: " + (", ".join(f"{k}={v:.4g}" for k, v in nums) or "no scalar params"))
     if not len(result):
         raise InputError(drive.path, "no method can run on this drive (see the skipped reasons above)")
