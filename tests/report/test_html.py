@@ -42,6 +42,7 @@ def hour_page() -> str:
     return render_report(drive, est, command="sideslip report x y --out r.html")
 
 
+@pytest.mark.slow  # an hour at 100 Hz: about 25 s on a loaded machine
 def test_an_hour_long_drive_stays_under_15_mb_with_time_from_the_start(hour_page):
     assert len(hour_page.encode()) < 15e6  # measured 7.7 MB (4.8 MB of it plotly.js)
     assert hour_page.count("Plotly=") <= 2 and hour_page.count("<script>") == 2  # plotly.js once
@@ -56,6 +57,7 @@ def test_an_hour_long_drive_stays_under_15_mb_with_time_from_the_start(hour_page
         assert fig["layout"]["xaxis"]["exponentformat"] == "none"  # no "46.41k s"
 
 
+@pytest.mark.slow  # an hour at 100 Hz: about 25 s on a loaded machine
 def test_gnss_outages_are_shaded_on_every_time_plot(hour_page):
     time_figs = [f for f in figures(hour_page) if f["layout"]["xaxis"]["title"]["text"] == "time from start (s)"]
     assert len(time_figs) >= 4
@@ -65,6 +67,7 @@ def test_gnss_outages_are_shaded_on_every_time_plot(hour_page):
         assert abs(shades[0]["x0"] - 60) < 0.2 and abs(shades[0]["x1"] - 90) < 0.2
 
 
+@pytest.mark.slow  # an hour at 100 Hz: about 25 s on a loaded machine
 def test_metrics_use_every_row_while_plots_are_decimated(hour_page):
     drive, est = synthetic_drive(1.0)
     full = evaluate_all(drive, {m: s for m, s in est.items() if m})
