@@ -124,3 +124,14 @@ def test_calibration_table_skipped_methods_parameters_and_foot():
     assert "<th>ekf_wss_sas</th><td class=left>drive lacks &#x27;v_rl&#x27;</td>" in page
     assert "<th>slip_gain_k_s2pm</th>" in page  # fused's identified slip gain, one row of its table
     assert "sideslip 0.1.0 · generated 20" in page and "sideslip report d.parquet e.parquet --out r.html" in page
+
+
+def test_identified_values_carry_their_sigma_in_the_parameter_table():
+    from sideslip.report.tables import params_html
+
+    page = params_html({"fused": {"slip_gain_k_s2pm": 0.0052, "slip_gain_k_sigma": 0.0002, "K": 0.004,
+                                  "K_std": 0.0003, "K_prior": 0.005}}, ["fused"])  # fmt: skip
+    assert "<th>slip_gain_k_s2pm</th><td class=left>0.0052 <span class=pm>± 0.0002</span>" in page
+    assert "<th>K</th><td class=left>0.004 <span class=pm>± 0.0003</span>" in page
+    assert "<th>K_prior</th><td class=left>0.005</td>" in page
+    assert "slip_gain_k_sigma" not in page and "K_std" not in page

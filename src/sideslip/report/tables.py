@@ -112,6 +112,24 @@ def _flatten(prefix: str, value: Any, out: list[tuple[str, Any]]) -> None:
         out.append((prefix, value))
 
 
+def _pair_sigmas(names: Sequence[str]) -> dict[str, str]:
+    """Value name -> its 1-sigma's name: ``K`` and ``K_std``, ``slip_gain_k_s2pm`` and
+    ``slip_gain_k_sigma`` (a unit suffix on the value, none on its sigma)."""
+    out: dict[str, str] = {}
+    for sig in names:
+        for suffix in ("_sigma", "_std"):
+            if not sig.endswith(suffix):
+                continue
+            base = sig[: -len(suffix)]
+            if base in names:
+                out[base] = sig
+                continue
+            close = [n for n in names if n.startswith(base + "_") and n != sig and not n.endswith(suffix)]
+            if len(close) == 1:
+                out[close[0]] = sig
+    return out
+
+
 SECTIONS = ("settings", "health")  # nested diagnostics shown folded under the main values
 
 
@@ -126,11 +144,13 @@ def params_html(params: Mapping[str, Any], order: Sequence[str]) -> str:
         rows = []
         flat: list[tuple[str, Any]] = []
         _flatten("", main, flat)
+        sigmas = _pair_sigmas([k for k, _ in flat])
         values = dict(flat)
+        paired = set(sigmas.values())
         for name, value in flat:
-            if name.endswith("_sigma") and name[: -len("_sigma")] in values:
+            if name in paired:
                 continue
-            sigma = values.get(f"{name}_sigma")
+            sigma = values.get(sigmas[name]) if name in sigmas else None
             cell = f"{_num(value)}" + (f" <span class=pm>± {_num(sigma)}</span>" if sigma is not None else "")
             rows.append(f"<tr><th>{esc(name)}</th><td class=left>{cell}</td></tr>")
         extra = []
