@@ -82,13 +82,13 @@ def vehicle_new(
     """Write a commented vehicle file to edit, starting from a preset."""
     from sideslip.vehicle import load_vehicle
 
-    if out != "-" and not out.endswith(".toml"):
+    if out != "-" and not out.endswith(".toml") and not out.startswith("/dev/"):
         raise InputError(out, "expected an output path ending in .toml")
-    if out != "-" and Path(out).exists() and not force:
+    if out != "-" and Path(out).is_file() and not force:
         raise InputError(out, "exists already: expected a new file name (or --force to replace it)")
     text = vehicle_file_text(preset, name or (Path(out).stem if out != "-" else preset))
     where = write_output(out, text)
-    if out != "-":
+    if out != "-" and Path(out).is_file():
         load_vehicle(out)  # the file we wrote loads (it is the preset's own content)
         note(f"wrote {where}: edit the values for your car, then --vehicle {out}")
 
