@@ -46,8 +46,8 @@ def guarded(func: F) -> F:
             if _STATE["debug"]:
                 raise
             _fail(str(exc), 2)
-        except KeyboardInterrupt:
-            _fail("interrupted", 130)
+        except KeyboardInterrupt as exc:  # SIGINT, or SIGTERM/SIGHUP via outputs.Interrupted
+            _fail("interrupted", 128 + getattr(exc, "signum", 2))
         return None
 
     return wrapper  # type: ignore[return-value]
@@ -62,12 +62,20 @@ def _main(
 
 def main() -> None:
     """Console entry point."""
+    from sideslip.outputs import install_signal_handlers, remove_temps
+
+    install_signal_handlers()
     try:
         app()
     except SystemExit:
         raise
+    except KeyboardInterrupt as exc:
+        say("error: interrupted")
+        sys.exit(128 + getattr(exc, "signum", 2))
     except Exception as exc:
         if _STATE["debug"] or "--debug" in sys.argv:
             raise
         say(f"error: internal error {type(exc).__name__}: {exc} (re-run with --debug for a traceback)")
         sys.exit(1)
+    finally:
+        remove_temps()

@@ -23,10 +23,12 @@ def convert_cmd(
     """Turn an outside recording into a drive.  Formats: comma2k19, mdf4, csv."""
     from sideslip.drive import save_drive
     from sideslip.io import FORMATS, convert
+    from sideslip.outputs import check_outputs, table_outputs
     from sideslip.vehicle import load_vehicle
 
     if fmt not in FORMATS:
         raise InputError(fmt, f"unknown format: expected one of {', '.join(FORMATS)}")
+    check_outputs(table_outputs(out), [src, map_path, vehicle])
     veh = load_vehicle(vehicle) if vehicle else None
     drive = convert(fmt, src, veh, map_path)
     save_drive(drive, out)

@@ -26,8 +26,10 @@ def demo_cmd(
     from sideslip.drive import _atomic_write, save_drive
     from sideslip.estimate import save_estimates
     from sideslip.evaluate import evaluate_all
+    from sideslip.outputs import check_outputs
     from sideslip.vehicle import load_vehicle
 
+    check_outputs([], folders=[out_dir])
     start = time.perf_counter()
     drive = sim.simulate(scenario, seed=seed)
     vehicle = load_vehicle(drive.meta["vehicle"])

@@ -93,15 +93,18 @@ def estimate_cmd(
     ] = None,
 ) -> None:
     """Run estimation methods on a drive and write their estimates (+ .params.json)."""
-    from sideslip.drive import load_drive
+    from sideslip.drive import load_drive, meta_path
     from sideslip.estimate import save_estimates
+    from sideslip.outputs import check_outputs, estimate_outputs, output_group
     from sideslip.vehicle import load_vehicle
 
     if out.suffix.lower() not in (".csv", ".parquet", ".pq"):
         raise InputError(str(out), "expected an output path ending in .csv or .parquet")
+    check_outputs(estimate_outputs(out), [drive_path, meta_path(drive_path), vehicle, config])
     chosen_settings = settings_from_cli(config, set_)
     veh = load_vehicle(vehicle)
     drive = load_drive(drive_path)
     estimates = run_methods(drive, veh, method, settings=chosen_settings)
-    params = save_estimates(drive.t, estimates, out, {"drive": str(drive_path), "vehicle": vehicle})
+    with output_group():  # the table and its .params.json appear together, or neither
+        params = save_estimates(drive.t, estimates, out, {"drive": str(drive_path), "vehicle": vehicle})
     console.print(f"wrote {out} ({len(estimates)} methods) and {params}")

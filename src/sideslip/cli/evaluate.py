@@ -10,7 +10,7 @@ import numpy as np
 import typer
 from rich.table import Table
 
-from sideslip.cli.app import app, console, guarded
+from sideslip.cli.app import app, console, err_console, guarded
 from sideslip.errors import InputError
 
 
@@ -29,7 +29,15 @@ def _parse_windows(values: list[str] | None) -> list[Any]:
     return out
 
 
+def _check_has_estimates(est: dict[str, Any], est_path: Path) -> None:
+    """An estimate table holds METHOD.series columns; a drive given twice holds none."""
+    if not any(name for name in est):
+        raise InputError(str(est_path), "holds no estimates: expected the columns METHOD.beta ... "
+                         "that `sideslip estimate` writes (a drive given twice?)")
+
+
 def _check_same_time_base(drive: Any, est: dict[str, Any], est_path: Path) -> None:
+    _check_has_estimates(est, est_path)
     t_est = est[""]["t"]
     if t_est.size != len(drive) or not np.allclose(t_est, drive.t, rtol=0, atol=1e-6):
         raise InputError(
@@ -82,7 +90,7 @@ def evaluate_cmd(
     drive_path: Annotated[Path, typer.Argument(metavar="DRIVE", help="Drive with reference columns.")],
     est_path: Annotated[Path, typer.Argument(metavar="EST", help="Estimate table from `sideslip estimate`.")],
     json_out: Annotated[
-        Path | None, typer.Option("--json", help="Write method -> metric -> value JSON.")
+        Path | None, typer.Option("--json", help="Write method -> metric -> value JSON ('-': stdout).")
     ] = None,
     window: Annotated[
         list[str] | None,
@@ -93,10 +101,13 @@ def evaluate_cmd(
     from sideslip.drive import _atomic_write, load_drive
     from sideslip.estimate import load_estimates
     from sideslip.evaluate import evaluate_all
+    from sideslip.outputs import check_outputs
 
     windows = _parse_windows(window)
+    check_outputs([json_out], [drive_path, est_path])
     drive = load_drive(drive_path)
     est = load_estimates(est_path)
+    _check_has_estimates(est, est_path)
     t_est = est[""]["t"]
     if t_est.size != len(drive) or not np.allclose(t_est, drive.t, rtol=0, atol=1e-6):
         raise InputError(
@@ -109,7 +120,9 @@ def evaluate_cmd(
             str(drive_path), "expected reference columns (ref_beta, ref_e, ...) to evaluate against"
         )
     results = evaluate_all(drive, est, windows)
-    console.print(metrics_table(results, f"metrics: {est_path.name} vs {drive_path.name}"))
+    shown = err_console if str(json_out) == "-" else console  # `--json -`: JSON alone on stdout
+    shown.print(metrics_table(results, f"metrics: {est_path.name} vs {drive_path.name}"))
     if json_out is not None:
         _atomic_write(json_out, lambda tmp: tmp.write_text(json.dumps(results, indent=2)))
-        console.print(f"wrote {json_out}")
+        if str(json_out) != "-":
+            console.print(f"wrote {json_out}")

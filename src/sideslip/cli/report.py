@@ -23,10 +23,12 @@ def report_cmd(
     """Write a self-contained HTML report with plots."""
     from sideslip.drive import load_drive
     from sideslip.estimate import load_estimates, params_path
+    from sideslip.outputs import check_outputs
     from sideslip.report.html import write_report
 
     if out.suffix.lower() not in (".html", ".htm"):
         raise InputError(str(out), "expected an output path ending in .html")
+    check_outputs([out], [drive_path, est_path])
     drive = load_drive(drive_path)
     est = load_estimates(est_path)
     _check_same_time_base(drive, est, est_path)

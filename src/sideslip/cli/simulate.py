@@ -24,8 +24,10 @@ def simulate_cmd(
     """Simulate a scenario and write a drive with reference columns."""
     import sideslip.simulate as sim
     from sideslip.drive import save_drive
+    from sideslip.outputs import check_outputs, table_outputs
     from sideslip.vehicle import load_vehicle
 
+    check_outputs(table_outputs(out), [vehicle])
     veh = load_vehicle(vehicle) if vehicle else None
     start = time.perf_counter()
     drive = sim.simulate(scenario, seed=seed, vehicle=veh)
