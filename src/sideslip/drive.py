@@ -58,7 +58,7 @@ MIN_ROWS = 2
 MAX_CELL_CHARS = 1 << 20
 
 # Evident-unit limits (section 5): |value| beyond the limit means a wrong unit.
-_LIMITS: list[tuple[tuple[str, ...], float, str]] = [
+LIMITS: list[tuple[tuple[str, ...], float, str]] = [
     (("steer",), 1.2, "a road-wheel angle in rad within +-1.2 (degrees or steering-wheel angle?)"),
     (
         (*SPEED_COLUMNS, "gnss_ve", "gnss_vn", "gnss_vu", "ref_vx", "ref_vy"),
@@ -211,7 +211,7 @@ def validate_frame(frame: pd.DataFrame, path: str) -> dict[str, np.ndarray]:
             column="t",
             row=i + 2,
         )
-    for names, limit, what in _LIMITS:
+    for names, limit, what in LIMITS:
         for name in names:
             col = out.get(name)
             if col is None:

@@ -7,7 +7,7 @@ from typing import Annotated
 
 import typer
 
-from sideslip.cli.app import app, console, guarded
+from sideslip.cli.app import app, console, guarded, say
 from sideslip.errors import InputError
 
 
@@ -31,5 +31,7 @@ def convert_cmd(
     check_outputs(table_outputs(out), [src, map_path, vehicle])
     veh = load_vehicle(vehicle) if vehicle else None
     drive = convert(fmt, src, veh, map_path)
+    for line in drive.meta.get("warnings", []):
+        say(f"warning: {line}")
     save_drive(drive, out)
     console.print(f"wrote {out}: {len(drive)} rows, {drive.t[-1] - drive.t[0]:.1f} s")
