@@ -434,7 +434,7 @@ def _in_time_order(t: FloatArray, v: FloatArray, rows: IntArray, src: str, chann
     back = step < 0
     if back.any():
         k = int(np.argmax(back)) + 1
-        raise InputError(src, f"time goes backwards, {t[k]!r} s after {t[k - 1]!r} s: expected "
+        raise InputError(src, f"time goes backwards, {t[k]:.9g} s after {t[k - 1]:.9g} s: expected "
                          "increasing time stamps", channel=channel, column=col, row=int(rows[k]))
     same = step == 0
     if not same.any():
@@ -442,7 +442,7 @@ def _in_time_order(t: FloatArray, v: FloatArray, rows: IntArray, src: str, chann
     clash = same & ~((v[1:] == v[:-1]) | (np.isnan(v[1:]) & np.isnan(v[:-1])))
     if clash.any():
         k = int(np.argmax(clash)) + 1
-        raise InputError(src, f"two samples at {t[k]!r} s ({v[k - 1]:g} and {v[k]:g}): expected "
+        raise InputError(src, f"two samples at {t[k]:.9g} s ({v[k - 1]:g} and {v[k]:g}): expected "
                          "one sample per time stamp", channel=channel, column=col, row=int(rows[k]))
     keep = np.r_[True, ~same]
     return t[keep], v[keep], int(np.count_nonzero(same))
