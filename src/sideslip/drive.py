@@ -169,6 +169,15 @@ def validate_frame(frame: pd.DataFrame, path: str) -> dict[str, np.ndarray]:
         name_s = str(name)
         series = frame[name]
         if name_s in COLUMNS or name_s in {c for k in GEODETIC for c in k}:
+            if series.dtype.kind in "bmM":  # a reader's guess of true/false or dates: no number
+                ok = series.notna().to_numpy()
+                raise InputError(
+                    path,
+                    f"expected a number in {COLUMNS.get(name_s, 'deg or m')}, got "
+                    f"{_short(series[ok].iloc[0]) if ok.any() else 'no numbers'}",
+                    column=name_s,
+                    row=_first_row(ok) if ok.any() else None,
+                )
             values = pd.to_numeric(series, errors="coerce").to_numpy(dtype=float)
             bad = np.isnan(values) & series.notna().to_numpy()
             if bad.any():

@@ -43,7 +43,9 @@ raises one :class:`InputError` line naming the map file, the column and what was
 
 from __future__ import annotations
 
+import gc
 import math
+import sys
 import tomllib
 from dataclasses import dataclass
 from pathlib import Path
@@ -338,11 +340,20 @@ class _Mdf:
         from asammdf import MDF
 
         self.path = path
+        error = None
+        # a damaged file leaves a half-built reader whose __del__ fails and would print a
+        # traceback at exit: collect it here, with the unraisable-exception hook silenced
+        hook, sys.unraisablehook = sys.unraisablehook, lambda _: None
         try:
-            self.mdf = MDF(path)
-        except Exception as exc:  # asammdf raises many types on a bad file
-            first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-            raise InputError(path, f"cannot read as mdf4: {first[:200]}") from None
+            try:
+                self.mdf = MDF(path)
+            except Exception as exc:  # asammdf raises many types on a bad file
+                error = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+            gc.collect()
+        finally:
+            sys.unraisablehook = hook
+        if error is not None:
+            raise InputError(path, f"cannot read as mdf4: {error[:200]}")
         self.smap = smap
 
     def names(self) -> list[str]:
