@@ -349,7 +349,8 @@ class _Mdf:
                 self.mdf = MDF(path)
             except Exception as exc:  # asammdf raises many types on a bad file
                 error = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-            gc.collect()
+            if error is not None:
+                gc.collect()
         finally:
             sys.unraisablehook = hook
         if error is not None:
