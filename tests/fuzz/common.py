@@ -51,7 +51,8 @@ SCALE = {
     "ref_vx": 15.0, "ref_vy": 0.3, "ref_r": 0.3, "ref_ay": 3.0,
 }  # fmt: skip
 DATA_COLUMNS = [c for c in COLUMNS if c != "t"]
-TEXT = st.sampled_from(["abc", "fast", "1,5", "N/A", "--", "0x1F", "12 deg", "true", "\u00e9t\u00e9"])
+# (the readers take "", "NA", "N/A", "NULL", "nan" for an empty cell: not text here)
+TEXT = st.sampled_from(["abc", "fast", "1,5", "n.a.", "--", "0x1F", "12 deg", "true", "\u00e9t\u00e9"])
 
 
 @st.composite

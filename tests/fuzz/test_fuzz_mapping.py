@@ -20,7 +20,7 @@ from hypothesis import strategies as st
 from sideslip.cli import app
 from sideslip.errors import InputError
 from sideslip.io.mapping import UNITS, column_dimension, convert_mapped
-from tests.fuzz.common import RUNNER, SCALE, TEXT, check_cli_outcome, count, fuzz_settings
+from tests.fuzz.common import LIMIT_OF, RUNNER, SCALE, TEXT, check_cli_outcome, count, fuzz_settings
 
 pytestmark = pytest.mark.automotive
 CANDIDATES = ["wz", "ay", "ax", "v_can", "v_fl", "steer", "gnss_ve", "wx"]
@@ -73,6 +73,7 @@ def test_convert_csv_map_on_hostile_sources(src, kind, data):
     wrong = None
     expect = None  # (channel, source row) an error must name
     backwards = False  # a channel has samples on both rows of a step back in time
+    evident = None  # a column whose unit mistake section 5's limits make evident
     if kind in ("text", "inf"):
         ch = data.draw(st.sampled_from(names))
         rows = np.flatnonzero(np.isfinite(cols[ch]))
@@ -93,6 +94,9 @@ def test_convert_csv_map_on_hostile_sources(src, kind, data):
         cols[ch][a : a + data.draw(st.integers(1, n))] = np.nan
     elif kind == "wrong_unit":
         wrong = data.draw(st.sampled_from(list(entries)))
+        limit = LIMIT_OF.get(wrong, (np.inf, ""))[0]
+        if np.nanmax(np.abs(cols[entries[wrong][0]]), initial=0.0) > limit:
+            evident = wrong  # the log's numbers read as SI pass the section 5 limit
     with tempfile.TemporaryDirectory() as tmp:
         d = Path(tmp)
         csv = d / "log.csv"
@@ -113,8 +117,10 @@ def test_convert_csv_map_on_hostile_sources(src, kind, data):
                 assert f": row {expect[1]}: expected a number" in msg, msg
             if backwards:
                 assert "time goes backwards" in msg, msg
+            if evident is not None:
+                assert f"column '{evident}'" in msg and "is beyond" in msg, msg
         else:
-            assert expect is None and not backwards
+            assert expect is None and not backwards and evident is None
             assert np.all(np.diff(drive.t) > 0)
             for col in entries:
                 if col in drive.data:

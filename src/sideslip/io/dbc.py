@@ -93,11 +93,11 @@ def decode_signal_rows(
         raise InputError(source, f"DBC signal {signal!r} not in message {message!r}: expected "
                          "one of " + ", ".join(s.name for s in msg.signals), column=column)
     id_values = np.empty(len(ids), dtype=np.int64)
-    for k, i in enumerate(np.asarray(ids).tolist()):
+    for n, i in enumerate(np.asarray(ids).tolist()):
         try:
-            id_values[k] = int(i, 16) if isinstance(i, str) else int(i)
+            id_values[n] = int(i, 16) if isinstance(i, str) else int(i)
         except (ValueError, TypeError, OverflowError):
-            raise InputError(source, f"frame {k + 1}: arbitration id {str(i)[:30]!r}: expected an "
+            raise InputError(source, f"frame {n + 1}: arbitration id {str(i)[:30]!r}: expected an "
                              "integer or hex text", column=column) from None
     rows = np.flatnonzero((id_values & 0x1FFFFFFF) == msg.frame_id)
     values = np.empty(rows.size)

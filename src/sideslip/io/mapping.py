@@ -320,6 +320,7 @@ class _Csv:
 
     def raw(self, channel: str, time: str | None = None) -> Channel:
         tcol = time or self.time
+        assert tcol is not None  # __init__ found the time column
         for name in (channel, tcol):
             if name not in self.frame.columns:
                 raise KeyError(name)
