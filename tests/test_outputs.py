@@ -120,6 +120,12 @@ def test_out_dir_that_is_a_file_and_out_that_is_a_folder(tmp_path, drive_csv):
     assert "cannot write in /proc" in line
 
 
+def test_output_that_is_no_table_is_refused_before_simulating(tmp_path):
+    line = _one_error_line(_cli("simulate", "demo", "--out", tmp_path / "drive.txt"))
+    assert line == f"error: {tmp_path / 'drive.txt'}: expected an output path ending in .csv or .parquet"
+    assert "wrote" not in line and list(tmp_path.iterdir()) == []
+
+
 def test_check_outputs_creates_nothing(tmp_path):
     check_outputs([tmp_path / "a" / "b" / "est.parquet"], [], folders=[tmp_path / "c"])
     assert list(tmp_path.iterdir()) == []

@@ -265,10 +265,15 @@ def check_outputs(
 
 
 def table_outputs(path: PathLike) -> list[Path]:
-    """The files a table write creates: the table and, for CSV, its ``.meta.json`` side-car."""
+    """The files a table write creates: the table and, for CSV, its ``.meta.json`` side-car.
+
+    A name that is no table (not .csv/.parquet) is an InputError here, before anything runs.
+    """
     from sideslip.drive import meta_path
 
     p = Path(path)
+    if p.suffix.lower() not in (".csv", ".parquet", ".pq"):
+        raise InputError(str(path), "expected an output path ending in .csv or .parquet")
     return [p, meta_path(p)] if p.suffix.lower() == ".csv" else [p]
 
 
