@@ -177,3 +177,83 @@ def test_loading_large_parquet_is_fast(tmp_path):
     drive = load_drive(p)
     assert len(drive) == n
     assert time.perf_counter() - start < 3.0
+
+
+# ------------------------------------------------------------------------------------------
+# hostile tables (issue 17)
+# ------------------------------------------------------------------------------------------
+def test_column_named_twice_in_csv_is_one_line_naming_it(tmp_path):
+    p = tmp_path / "dup.csv"
+    p.write_text("t,wz,ay,wz\n0,0.1,0,0.2\n0.01,0.1,0,0.2\n")
+    with pytest.raises(InputError) as info:
+        load_drive(p)
+    assert str(info.value) == (f"{p}: column 'wz': appears twice: expected each column once "
+                               "(which one holds the data?)")
+
+
+def test_column_named_twice_in_parquet_is_one_line_naming_it(tmp_path):
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    p = tmp_path / "dup.parquet"
+    arrays = [pa.array([0.0, 0.01]), pa.array([0.1, 0.1]), pa.array([0.2, 0.2])]
+    pq.write_table(pa.table(arrays, names=["t", "wz", "wz"]), p)
+    with pytest.raises(InputError, match=r"dup.parquet: column 'wz': appears twice"):
+        load_drive(p)
+
+
+@pytest.mark.parametrize("column", ["wz", "driver_note"])
+def test_twenty_megabyte_cell_names_file_column_and_row(tmp_path, column):
+    frame = pd.read_csv(CIRCLE).head(20)
+    frame[column] = frame[column].astype(object)
+    frame.loc[6, column] = "x" * (20 << 20)
+    p = tmp_path / "big.csv"
+    frame.to_csv(p, index=False)
+    with pytest.raises(InputError) as info:
+        load_drive(p)
+    msg = str(info.value)
+    assert msg.startswith(f"{p}: column '{column}': row 7: a cell of 20,971,520 characters")
+    assert len(msg) < 300 and "\n" not in msg
+
+
+def test_long_cell_in_parquet_is_named_too(tmp_path):
+    p = tmp_path / "big.parquet"
+    pd.DataFrame({"t": [0.0, 1.0], "wz": [0.0, 0.0], "note": ["ok", "y" * (2 << 20)]}).to_parquet(p)
+    with pytest.raises(InputError, match=r"column 'note': row 2: a cell of 2,097,152 characters"):
+        load_drive(p)
+
+
+def test_malformed_csv_row_is_named(tmp_path):
+    p = tmp_path / "ragged.csv"
+    p.write_text("t,wz\n0,0.1\n0.01,0.1\n0.02,0.1,7,8\n")
+    with pytest.raises(InputError) as info:
+        load_drive(p)
+    assert str(info.value).startswith(f"{p}: row 3: cannot read as csv:")
+
+
+@pytest.mark.parametrize("rows", [0, 1])
+def test_fewer_than_two_rows_say_what_is_needed(tmp_path, rows):
+    p = _write(tmp_path, {k: v[:rows] for k, v in _small().items()})
+    with pytest.raises(InputError) as info:
+        load_drive(p)
+    assert str(info.value) == (f"{p}: column 't': expected at least 2 rows (time stamps) to "
+                               f"estimate anything, got {rows}")
+
+
+def test_long_bad_text_in_a_numeric_column_is_cut_in_the_message(tmp_path):
+    cols = _small()
+    cols["wz"] = cols["wz"].astype(object)
+    cols["wz"][3] = "z" * 5000
+    p = _write(tmp_path, cols)
+    with pytest.raises(InputError) as info:
+        load_drive(p)
+    msg = str(info.value)
+    assert "column 'wz': row 4: expected a number in rad/s, got 'zzz" in msg
+    assert "(5,000 characters)" in msg and len(msg) < 300
+
+
+def test_side_car_that_is_not_an_object_is_one_line(tmp_path):
+    p = _write(tmp_path, _small())
+    meta_path(p).write_text("[1, 2]")
+    with pytest.raises(InputError, match=r"d.meta.json: expected a JSON object of metadata"):
+        load_drive(p)

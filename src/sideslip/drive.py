@@ -6,9 +6,9 @@ the 12th sample of the table in both CSV and Parquet.
 
 from __future__ import annotations
 
+import csv
 import json
-import os
-import tempfile
+import re
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -22,6 +22,9 @@ from numpy.typing import NDArray
 
 from sideslip.errors import InputError
 from sideslip.frames import geodetic_to_enu
+from sideslip.outputs import atomic_write, output_group
+
+_atomic_write = atomic_write  # the name the other modules import
 
 FloatArray = NDArray[np.float64]
 
@@ -47,8 +50,15 @@ GEODETIC = {
     ("ref_lat", "ref_lon", "ref_h"): ("ref_e", "ref_n", "ref_u"),
 }
 
+# Fewest rows a drive may have: every method needs one step of time (two stamps); a one-row
+# table holds no motion and ends in singular least-squares systems.
+MIN_ROWS = 2
+# Longest cell accepted in a table (characters): a longer one is a broken file (a missing line
+# break or closing quote swallowed the rows after it), not a value.
+MAX_CELL_CHARS = 1 << 20
+
 # Evident-unit limits (section 5): |value| beyond the limit means a wrong unit.
-_LIMITS: list[tuple[tuple[str, ...], float, str]] = [
+LIMITS: list[tuple[tuple[str, ...], float, str]] = [
     (("steer",), 1.2, "a road-wheel angle in rad within +-1.2 (degrees or steering-wheel angle?)"),
     (
         (*SPEED_COLUMNS, "gnss_ve", "gnss_vn", "gnss_vu", "ref_vx", "ref_vy"),
@@ -128,12 +138,30 @@ def _first_row(mask: np.ndarray) -> int:
     return int(np.argmax(mask)) + 1
 
 
+def _short(value: Any, limit: int = 40) -> str:
+    """``repr`` of a cell for a one-line message, cut to ``limit`` characters."""
+    text = repr(value)
+    if len(text) > limit:
+        text = f"{text[: limit - 12]}... ({len(str(value)):,} characters)"
+    return text.replace("\n", " ")
+
+
+def _check_names(names: list[str], path: str) -> None:
+    seen: set[str] = set()
+    for name in names:
+        if name in seen:
+            raise InputError(path, "appears twice: expected each column once (which one holds the "
+                             "data?)", column=name)
+        seen.add(name)
+
+
 def validate_frame(frame: pd.DataFrame, path: str) -> dict[str, np.ndarray]:
     """Apply contract section 5 to a table; return its columns as arrays.
 
     Raises :class:`InputError` on the first violated rule, naming file, column, row and what
     was expected.
     """
+    _check_names([str(c) for c in frame.columns], path)
     if "t" not in frame.columns:
         raise InputError(path, "required column is missing: expected time stamps in s", column="t")
     out: dict[str, np.ndarray] = {}
@@ -141,13 +169,23 @@ def validate_frame(frame: pd.DataFrame, path: str) -> dict[str, np.ndarray]:
         name_s = str(name)
         series = frame[name]
         if name_s in COLUMNS or name_s in {c for k in GEODETIC for c in k}:
+            if series.dtype.kind in "bmM":  # a reader's guess of true/false or dates: no number
+                ok = series.notna().to_numpy()
+                raise InputError(
+                    path,
+                    f"expected a number in {COLUMNS.get(name_s, 'deg or m')}, got "
+                    f"{_short(series[ok].iloc[0]) if ok.any() else 'no numbers'}",
+                    column=name_s,
+                    row=_first_row(ok) if ok.any() else None,
+                )
             values = pd.to_numeric(series, errors="coerce").to_numpy(dtype=float)
             bad = np.isnan(values) & series.notna().to_numpy()
             if bad.any():
                 row = _first_row(bad)
                 raise InputError(
                     path,
-                    f"expected a number in {COLUMNS.get(name_s, 'deg or m')}, got {series.iloc[row - 1]!r}",
+                    f"expected a number in {COLUMNS.get(name_s, 'deg or m')}, got "
+                    f"{_short(series.iloc[row - 1])}",
                     column=name_s,
                     row=row,
                 )
@@ -165,8 +203,12 @@ def validate_frame(frame: pd.DataFrame, path: str) -> dict[str, np.ndarray]:
                 arr = arr.astype(float)
             out[name_s] = arr
     t = out.pop("t")
-    if t.size == 0:
-        raise InputError(path, "expected at least one row of data", column="t")
+    if t.size < MIN_ROWS:
+        raise InputError(
+            path,
+            f"expected at least {MIN_ROWS} rows (time stamps) to estimate anything, got {t.size}",
+            column="t",
+        )
     if np.isnan(t).any():
         raise InputError(path, "expected a time stamp in every row", column="t", row=_first_row(np.isnan(t)))
     steps = np.diff(t)
@@ -178,7 +220,7 @@ def validate_frame(frame: pd.DataFrame, path: str) -> dict[str, np.ndarray]:
             column="t",
             row=i + 2,
         )
-    for names, limit, what in _LIMITS:
+    for names, limit, what in LIMITS:
         for name in names:
             col = out.get(name)
             if col is None:
@@ -234,8 +276,73 @@ def meta_path(path: Path) -> Path:
     return path.with_name(path.stem + ".meta.json")
 
 
+def _csv_header(p: Path) -> list[str]:
+    """The column names exactly as the CSV's first line spells them (readers rename repeats)."""
+    with open(p, encoding="utf-8", errors="replace", newline="") as fh:
+        line = fh.readline(MAX_CELL_CHARS)
+    try:
+        return next(csv.reader([line]), [])
+    except csv.Error:
+        return []
+
+
+def _check_cells(frame: pd.DataFrame, src: str) -> None:
+    """A text cell longer than :data:`MAX_CELL_CHARS` is a broken file: name its row."""
+    for name in frame.columns:
+        col = frame[name]
+        if col.dtype.kind in "fiubmM":  # numbers and times: no text to measure
+            continue
+        lengths = col.map(lambda v: len(v) if isinstance(v, str) else 0).to_numpy()
+        over = lengths > MAX_CELL_CHARS
+        if over.any():
+            row = _first_row(over)
+            raise InputError(
+                src,
+                f"a cell of {int(lengths[row - 1]):,} characters: expected a value (a missing line "
+                "break or closing quote?)",
+                column=str(name),
+                row=row,
+            )
+
+
+def _read_csv(p: Path, src: str) -> pd.DataFrame:
+    if not p.stat().st_size:
+        return pd.DataFrame()
+    _check_names(_csv_header(p), src)
+    try:
+        frame = pd.read_csv(p, engine="pyarrow")
+    except (ValueError, pa.ArrowException):
+        # pyarrow's fast reader names no row (e.g. a cell longer than its block): read again
+        # with pandas' own parser, which names the line of a malformed row.
+        try:
+            frame = pd.read_csv(p, engine="c", low_memory=False)
+        except (ValueError, UnicodeDecodeError) as exc:
+            text = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+            line = re.search(r"in line (\d+)", text)
+            if line:  # pandas counts file lines from 1 with the header; rows start after it
+                raise InputError(src, f"cannot read as csv: {text}", row=int(line.group(1)) - 1) from None
+            raise
+    _check_cells(frame, src)
+    return frame
+
+
+def _read_parquet(p: Path, src: str, meta: dict[str, Any]) -> pd.DataFrame:
+    _check_names([str(n) for n in pq.read_schema(p).names], src)
+    table = pq.ParquetFile(p).read()
+    kv = table.schema.metadata or {}
+    if b"sideslip" in kv:
+        meta.update(json.loads(kv[b"sideslip"]))
+    frame = table.to_pandas()
+    _check_cells(frame, src)
+    return frame
+
+
 def read_table(path: str | Path) -> tuple[pd.DataFrame, dict[str, Any]]:
-    """Read a CSV or Parquet table and its metadata; unreadable files raise InputError."""
+    """Read a CSV or Parquet table and its metadata; unreadable files raise InputError.
+
+    Columns named twice and cells too long to be values (:data:`MAX_CELL_CHARS`) are errors
+    naming the column (and row).
+    """
     p = Path(path)
     src = str(path)
     suffix = p.suffix.lower()
@@ -245,23 +352,19 @@ def read_table(path: str | Path) -> tuple[pd.DataFrame, dict[str, Any]]:
         raise InputError(src, "cannot read: no such file")
     meta: dict[str, Any] = {}
     try:
-        if suffix == ".csv":
-            frame = pd.read_csv(p, engine="pyarrow") if p.stat().st_size else pd.DataFrame()
-        else:
-            table = pq.read_table(p)
-            kv = table.schema.metadata or {}
-            if b"sideslip" in kv:
-                meta.update(json.loads(kv[b"sideslip"]))
-            frame = table.to_pandas()
-    except (OSError, ValueError, pa.ArrowException, json.JSONDecodeError) as exc:
+        frame = _read_csv(p, src) if suffix == ".csv" else _read_parquet(p, src, meta)
+    except (OSError, ValueError, pa.ArrowException, json.JSONDecodeError, UnicodeDecodeError) as exc:
         first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-        raise InputError(src, f"cannot read as {suffix[1:]}: {first}") from None
+        raise InputError(src, f"cannot read as {suffix[1:]}: {first[:200]}") from None
     side = meta_path(p)
     if side.is_file():
         try:
-            meta.update(json.loads(side.read_text()))
-        except (OSError, json.JSONDecodeError) as exc:
-            raise InputError(str(side), f"expected JSON metadata ({exc})") from None
+            extra = json.loads(side.read_text())
+        except (OSError, json.JSONDecodeError, UnicodeDecodeError) as exc:
+            raise InputError(str(side), f"expected JSON metadata ({str(exc)[:200]})") from None
+        if not isinstance(extra, dict):
+            raise InputError(str(side), "expected a JSON object of metadata")
+        meta.update(extra)
     return frame, meta
 
 
@@ -272,21 +375,6 @@ def load_drive(path: str | Path) -> Drive:
     _geodetic_to_enu(cols, meta, str(path))
     t = cols.pop("t")
     return Drive(t=t, data=cols, meta=meta, path=str(path))
-
-
-def _atomic_write(path: Path, write: Any) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".part")
-    os.close(fd)
-    try:
-        write(Path(tmp))
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
 
 
 def save_table(frame: pd.DataFrame, path: str | Path, meta: Mapping[str, Any] | None = None) -> None:
@@ -301,15 +389,16 @@ def save_table(frame: pd.DataFrame, path: str | Path, meta: Mapping[str, Any] | 
         raise InputError(str(path), "expected an output path ending in .csv or .parquet")
     meta = dict(meta or {})
     if suffix == ".csv":
-        _atomic_write(p, lambda tmp: frame.to_csv(tmp, index=False, float_format="%.10g"))
-        if meta:
-            _atomic_write(meta_path(p), lambda tmp: tmp.write_text(json.dumps(meta, indent=2)))
+        with output_group():  # the table and its side-car appear together, or neither
+            atomic_write(p, lambda tmp: frame.to_csv(tmp, index=False, float_format="%.10g"))
+            if meta:
+                atomic_write(meta_path(p), lambda tmp: tmp.write_text(json.dumps(meta, indent=2)))
     else:
         table = pa.Table.from_pandas(frame, preserve_index=False)
         kv = dict(table.schema.metadata or {})
         kv[b"sideslip"] = json.dumps(meta).encode()
         table = table.replace_schema_metadata(kv)
-        _atomic_write(p, lambda tmp: pq.write_table(table, tmp))
+        atomic_write(p, lambda tmp: pq.write_table(table, tmp))
 
 
 def save_drive(drive: Drive, path: str | Path) -> None:

@@ -323,3 +323,129 @@ def test_unit_table_factors() -> None:
     assert UNITS["mph"][1] == pytest.approx(1609.344 / 3600)
     assert UNITS["deg/s"][1] == pytest.approx(math.pi / 180)
     assert UNITS["g"][1] == pytest.approx(9.80665)
+
+
+# ------------------------------------------------------------------------------------------
+# hostile sources (issue 17): nothing re-sorted, dropped or turned into NaN without a word
+# ------------------------------------------------------------------------------------------
+def _two_channel_csv(tmp_path: Path, t: list, w: list, v: list | None = None) -> tuple[Path, Path]:
+    cols = {"time": t, "w": w}
+    if v is not None:
+        cols["v"] = v
+    csv = tmp_path / "log.csv"
+    pd.DataFrame(cols).to_csv(csv, index=False)
+    mp = tmp_path / "m.toml"
+    text = '[columns.wz]\nchannel = "w"\nunit = "deg/s"\n'
+    if v is not None:
+        text += '\n[columns.v_can]\nchannel = "v"\nunit = "km/h"\n'
+    mp.write_text(text)
+    return csv, mp
+
+
+def test_csv_time_going_backwards_is_one_line_naming_channel_and_row(tmp_path: Path) -> None:
+    csv, mp = _two_channel_csv(tmp_path, [0.0, 0.01, 0.02, 0.015, 0.03], [1.0, 2.0, 3.0, 4.0, 5.0])
+    with pytest.raises(InputError) as info:
+        convert_mapped(csv, mp, "csv")
+    assert str(info.value) == (f"{csv}: channel 'w': column 'wz': row 4: time goes backwards, "
+                               "0.015 s after 0.02 s: expected increasing time stamps")
+
+
+def test_csv_text_and_infinity_in_a_mapped_channel_are_errors_not_nan(tmp_path: Path) -> None:
+    csv, mp = _two_channel_csv(tmp_path, [0.0, 0.01, 0.02], [1.0, 2.0, 3.0],
+                               [36.0, "fast", 36.0])
+    with pytest.raises(InputError) as info:
+        convert_mapped(csv, mp, "csv")
+    assert str(info.value) == (f"{csv}: channel 'v': column 'v_can': row 2: expected a number in "
+                               "km/h, got 'fast'")
+    csv, mp = _two_channel_csv(tmp_path, [0.0, 0.01, 0.02], [1.0, 2.0, 3.0], [36.0, 36.0, np.inf])
+    with pytest.raises(InputError, match=r"channel 'v': column 'v_can': row 3: expected a number "
+                       r"in km/h \(finite\) or an empty cell, got inf"):
+        convert_mapped(csv, mp, "csv")
+
+
+def test_csv_text_in_the_time_column_and_values_without_time(tmp_path: Path) -> None:
+    csv, mp = _two_channel_csv(tmp_path, [0.0, "noon", 0.02], [1.0, 2.0, 3.0])
+    with pytest.raises(InputError, match=r"log.csv: channel 'time': row 2: expected a time stamp, "
+                       r"got 'noon'"):
+        convert_mapped(csv, mp, "csv")
+    csv, mp = _two_channel_csv(tmp_path, [0.0, None, 0.02], [1.0, 2.0, 3.0])
+    with pytest.raises(InputError, match=r"channel 'time': row 2: a value of 'w' without a time"):
+        convert_mapped(csv, mp, "csv")
+
+
+def test_sample_logged_twice_is_dropped_with_a_warning(tmp_path: Path) -> None:
+    from typer.testing import CliRunner
+
+    from sideslip.cli import app
+
+    csv, mp = _two_channel_csv(tmp_path, [0.0, 0.01, 0.01, 0.02], [1.0, 2.0, 2.0, 3.0])
+    drive = convert_mapped(csv, mp, "csv")
+    np.testing.assert_allclose(drive.t, [0.0, 0.01, 0.02])
+    assert drive.meta["warnings"] == [f"{csv}: channel 'w': column 'wz': 1 sample(s) logged twice "
+                                      "(same time stamp and value) dropped"]
+    res = CliRunner().invoke(app, ["convert", "csv", str(csv), "--map", str(mp), "--out",
+                                   str(tmp_path / "d.parquet")])
+    assert res.exit_code == 0
+    assert "warning: " + drive.meta["warnings"][0] in res.stderr
+    # the same stamp with another value is not a repeat: which one is right is unknown
+    csv, mp = _two_channel_csv(tmp_path, [0.0, 0.01, 0.01, 0.02], [1.0, 2.0, 2.5, 3.0])
+    with pytest.raises(InputError, match=r"channel 'w': column 'wz': row 3: two samples at 0.01 s"):
+        convert_mapped(csv, mp, "csv")
+
+
+def test_samples_outside_the_base_are_dropped_with_a_warning(tmp_path: Path) -> None:
+    csv = tmp_path / "log.csv"
+    pd.DataFrame({"time": [0.0, 0.01, 0.02, 5.0], "w": [1.0, 2.0, 3.0, None],
+                  "v": [36.0, None, None, 36.0]}).to_csv(csv, index=False)
+    mp = tmp_path / "m.toml"
+    mp.write_text('[columns.wz]\nchannel = "w"\nunit = "deg/s"\n\n'
+                  '[columns.v_can]\nchannel = "v"\nunit = "km/h"\n')
+    drive = convert_mapped(csv, mp, "csv")
+    assert drive.meta["warnings"] == [f"{csv}: column 'v_can': 1 of 2 sample(s) dropped (outside "
+                                      "the time span of the base column 'wz' or no free row near them)"]
+
+
+def test_evident_unit_mistake_names_the_source_row(tmp_path: Path) -> None:
+    # a speed logged in km/h mapped as m/s: 180 km/h passes 150 "m/s" only on source row 4
+    csv = tmp_path / "log.csv"
+    pd.DataFrame({"time": 0.01 * np.arange(8), "w": np.zeros(8),
+                  "v": [None, 100.0, None, 180.0, None, 100.0, None, 100.0]}).to_csv(csv, index=False)
+    mp = tmp_path / "m.toml"
+    mp.write_text('[columns.wz]\nchannel = "w"\nunit = "rad/s"\n\n'
+                  '[columns.v_can]\nchannel = "v"\nunit = "m/s"\n')
+    with pytest.raises(InputError) as info:
+        convert_mapped(csv, mp, "csv")
+    assert str(info.value) == (f"{csv}: channel 'v': column 'v_can': row 4: value 180 is beyond "
+                               "150: expected a speed in m/s within +-150 (km/h or mph?) (the map "
+                               "says m/s)")
+
+
+def test_csv_source_with_a_column_named_twice(tmp_path: Path) -> None:
+    csv = tmp_path / "log.csv"
+    csv.write_text("time,w,w\n0,1,2\n0.01,1,2\n")
+    mp = tmp_path / "m.toml"
+    mp.write_text('[columns.wz]\nchannel = "w"\nunit = "rad/s"\n')
+    with pytest.raises(InputError, match=r"log.csv: column 'w': appears twice"):
+        convert_mapped(csv, mp, "csv")
+
+
+def test_mdf4_time_going_backwards_and_infinity_are_named(tmp_path: Path) -> None:
+    asammdf = pytest.importorskip("asammdf")
+    t = np.array([0.0, 0.01, 0.02, 0.005, 0.04])
+    mdf = asammdf.MDF(version="4.10")
+    mdf.append([asammdf.Signal(np.ones(5), t, name="YawRate", unit="deg/s")])
+    mdf.save(tmp_path / "rec.mf4", overwrite=True)
+    mp = tmp_path / "m.toml"
+    mp.write_text('[columns.wz]\nchannel = "YawRate"\nunit = "deg/s"\n')
+    with pytest.raises(InputError) as info:
+        convert_mapped(tmp_path / "rec.mf4", mp, "mdf4")
+    assert str(info.value) == (f"{tmp_path / 'rec.mf4'}: channel 'YawRate': column 'wz': row 4: "
+                               "time goes backwards, 0.005 s after 0.02 s: expected increasing time "
+                               "stamps")
+    mdf = asammdf.MDF(version="4.10")
+    mdf.append([asammdf.Signal(np.array([1.0, np.inf, 1.0]), 0.01 * np.arange(3), name="YawRate",
+                               unit="deg/s")])
+    mdf.save(tmp_path / "rec.mf4", overwrite=True)
+    with pytest.raises(InputError, match=r"channel 'YawRate': column 'wz': row 2: expected a number "
+                       r"in deg/s \(finite\) or an empty cell, got inf"):
+        convert_mapped(tmp_path / "rec.mf4", mp, "mdf4")

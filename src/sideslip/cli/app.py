@@ -5,10 +5,7 @@ from __future__ import annotations
 
 import contextlib
 import functools
-import os
-import stat
 import sys
-import tempfile
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Annotated, Any, TypeVar
@@ -69,8 +66,8 @@ def guarded(func: F) -> F:
             if _STATE["debug"]:
                 raise
             _fail(str(exc), 2)
-        except KeyboardInterrupt:
-            _fail("interrupted", 130)
+        except KeyboardInterrupt as exc:  # SIGINT, or SIGTERM/SIGHUP via outputs.Interrupted
+            _fail("interrupted", 128 + getattr(exc, "signum", 2))
         return None
 
     return wrapper  # type: ignore[return-value]
@@ -85,59 +82,22 @@ STDOUT_NAMES = ("-", "/dev/stdout", "/dev/fd/1", "/proc/self/fd/1")
 def write_output(path: str | Path, data: str | bytes) -> str:
     """Write ``data`` to ``path`` and return where it went (for the "wrote ..." line).
 
-    ``-`` (and ``/dev/stdout``) writes to this process's stdout, wherever the shell sent it.
-    A symlink is followed and its target written (the link stays a
-    link); a character device, FIFO or socket (``/dev/stdout``, a pipe) is opened and written
-    in place; a regular file is replaced atomically (temporary file in the same folder, then
-    rename), so a failure never leaves it half-written.
+    ``-`` (and ``/dev/stdout``) writes to this process's stdout; everything else goes through
+    :func:`sideslip.outputs.atomic_write` (links written through, devices directly, regular
+    files replaced atomically).
     """
+    from sideslip.outputs import STDOUT, atomic_write
+
     raw = data.encode() if isinstance(data, str) else data
     if str(path) in STDOUT_NAMES:
         sys.stdout.flush()
         sys.stdout.buffer.write(raw)
         sys.stdout.buffer.flush()
         return "stdout"
-    p = Path(path)
-    try:
-        mode = p.stat().st_mode  # follows symlinks
-    except FileNotFoundError:
-        mode = None
-    except OSError as exc:
-        raise InputError(str(p), f"cannot write: {exc.strerror}") from None
-    if mode is not None and stat.S_ISDIR(mode):
-        raise InputError(str(p), "is a folder: expected a file name")
-    special = str(p.absolute()).startswith(("/dev/", "/proc/"))
-    if special or (mode is not None and not stat.S_ISREG(mode)):
-        # a device, pipe or /dev/stdout: no rename possible (and a rename would detach the file
-        # a shell redirected stdout to), so write through
-        try:
-            with open(p, "ab") as fh:
-                fh.write(raw)
-        except OSError as exc:
-            raise InputError(str(p), f"cannot write: {exc.strerror}") from None
-        return str(p)
-    target = Path(os.path.realpath(p))  # a symlink's target is replaced, the link stays
-    try:
-        target.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.", suffix=".part")
-    except OSError as exc:
-        raise InputError(str(p), f"cannot write: {exc.strerror}") from None
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            fh.write(raw)
-        old = mode if mode is not None else 0o666 & ~_umask()
-        os.chmod(tmp, stat.S_IMODE(old))
-        os.replace(tmp, target)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    return str(p)
-
-
-def _umask() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
+    if Path(path).is_dir():
+        raise InputError(str(path), "is a folder: expected a file name")
+    atomic_write(path, lambda tmp: tmp.write_bytes(raw))
+    return STDOUT if str(path) == STDOUT else str(path)
 
 
 # ------------------------------------------------------------------------------------------
@@ -203,12 +163,20 @@ def _main(
 
 def main() -> None:
     """Console entry point."""
+    from sideslip.outputs import install_signal_handlers, remove_temps
+
+    install_signal_handlers()
     try:
         app()
     except SystemExit:
         raise
+    except KeyboardInterrupt as exc:
+        say("error: interrupted")
+        sys.exit(128 + getattr(exc, "signum", 2))
     except Exception as exc:
         if _STATE["debug"] or "--debug" in sys.argv:
             raise
         say(f"error: internal error {type(exc).__name__}: {exc} (re-run with --debug for a traceback)")
         sys.exit(1)
+    finally:
+        remove_temps()

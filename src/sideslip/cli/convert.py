@@ -7,7 +7,7 @@ from typing import Annotated
 
 import typer
 
-from sideslip.cli.app import app, guarded, note, write_output
+from sideslip.cli.app import app, guarded, note, say, write_output
 from sideslip.errors import InputError
 
 
@@ -41,11 +41,15 @@ def convert_cmd(
     if fmt is None or src is None or out is None:
         raise InputError("convert", "expected FORMAT SRC --out DRIVE (or --template FORMAT)")
     from sideslip.drive import save_drive
+    from sideslip.outputs import check_outputs, table_outputs
     from sideslip.vehicle import load_vehicle
 
     if fmt not in FORMATS:
         raise InputError(fmt, f"unknown format: expected one of {', '.join(FORMATS)}")
+    check_outputs(table_outputs(out), [src, map_path, vehicle])
     veh = load_vehicle(vehicle) if vehicle else None
     drive = convert(fmt, src, veh, map_path)
+    for line in drive.meta.get("warnings", []):
+        say(f"warning: {line}")
     save_drive(drive, out)
     note(f"wrote {out}: {len(drive)} rows, {drive.t[-1] - drive.t[0]:.1f} s")

@@ -25,9 +25,11 @@ def demo_cmd(
     import sideslip.simulate as sim
     from sideslip.drive import save_drive
     from sideslip.evaluate import evaluate_all
+    from sideslip.outputs import check_outputs
     from sideslip.report.html import write_report
     from sideslip.vehicle import load_vehicle
 
+    check_outputs([], folders=[out_dir])
     start = time.perf_counter()
     with progress_bar(f"simulating {scenario}", None):
         drive = sim.simulate(scenario, seed=seed)

@@ -112,8 +112,9 @@ def estimate_cmd(
     ] = False,
 ) -> None:
     """Run estimation methods on a drive and write their estimates (+ .params.json)."""
-    from sideslip.drive import load_drive
+    from sideslip.drive import load_drive, meta_path
     from sideslip.estimate import save_estimates
+    from sideslip.outputs import check_outputs, estimate_outputs, output_group
     from sideslip.vehicle import load_vehicle
 
     if out.suffix.lower() not in (".csv", ".parquet", ".pq"):
@@ -126,6 +127,7 @@ def estimate_cmd(
             "--heading-convention",
             f"'{heading_convention}': expected one of {', '.join(HEADING_CONVENTIONS)}",
         )
+    check_outputs(estimate_outputs(out), [drive_path, meta_path(drive_path), vehicle, config])
     chosen_settings = settings_from_cli(config, set_)
     veh = load_vehicle(vehicle)
     drive = load_drive(drive_path)
@@ -135,7 +137,8 @@ def estimate_cmd(
         drive_origin(drive)  # fails before any method runs
     result = run_estimates(drive, veh, method, settings=chosen_settings)
     estimates = with_conventions(drive, list(result), heading_convention, geodetic)  # type: ignore[arg-type]
-    params = save_estimates(
-        drive.t, estimates, out, {"drive": str(drive_path), "vehicle": vehicle}, result.skipped
-    )
+    with output_group():  # the table and its .params.json appear together, or neither
+        params = save_estimates(
+            drive.t, estimates, out, {"drive": str(drive_path), "vehicle": vehicle}, result.skipped
+        )
     note(f"wrote {out} ({len(estimates)} methods) and {params}")

@@ -24,7 +24,15 @@ def _parse_windows(values: list[str] | None) -> list[Any]:
     return [parse_window(v) for v in values or []]
 
 
+def _check_has_estimates(est: dict[str, Any], est_path: Path) -> None:
+    """An estimate table holds METHOD.series columns; a drive given twice holds none."""
+    if not any(name for name in est):
+        raise InputError(str(est_path), "holds no estimates: expected the columns METHOD.beta ... "
+                         "that `sideslip estimate` writes (a drive given twice?)")
+
+
 def _check_same_time_base(drive: Any, est: dict[str, Any], est_path: Path) -> None:
+    _check_has_estimates(est, est_path)
     t_est = est[""]["t"]
     if t_est.size != len(drive) or not np.allclose(t_est, drive.t, rtol=0, atol=1e-6):
         raise InputError(
@@ -125,9 +133,11 @@ def evaluate_cmd(
     """Compare estimates to the drive's reference columns; print a metrics table."""
     from sideslip.drive import load_drive
     from sideslip.estimate import load_estimates
+    from sideslip.outputs import check_outputs
     from sideslip.windows import check_windows, evaluate_windows
 
     windows = _parse_windows(window)
+    check_outputs([json_out], [drive_path, est_path])
     drive = load_drive(drive_path)
     check_windows(drive, windows)
     est = load_estimates(est_path)

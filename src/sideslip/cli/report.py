@@ -28,6 +28,7 @@ def report_cmd(
     """Write a self-contained HTML report with plots (and static figures with --static)."""
     from sideslip.drive import load_drive
     from sideslip.estimate import load_estimates, params_path
+    from sideslip.outputs import check_outputs
 
     if out is None and static is None:
         raise InputError("--out", "expected --out report.html and/or --static DIR")
@@ -35,6 +36,7 @@ def report_cmd(
         raise InputError(str(out), "expected an output path ending in .html")
     if static is not None and static.exists() and not static.is_dir():
         raise InputError(str(static), "expected a folder for the static figures")
+    check_outputs([out], [drive_path, est_path], folders=[static])
     drive = load_drive(drive_path)
     est = load_estimates(est_path)
     _check_same_time_base(drive, est, est_path)

@@ -24,11 +24,10 @@ def simulate_cmd(
     """Simulate a scenario and write a drive with reference columns."""
     import sideslip.simulate as sim
     from sideslip.drive import save_drive
-    from sideslip.errors import InputError
+    from sideslip.outputs import check_outputs, table_outputs
     from sideslip.vehicle import load_vehicle
 
-    if out.suffix.lower() not in (".csv", ".parquet", ".pq"):
-        raise InputError(str(out), "expected an output path ending in .csv or .parquet")
+    check_outputs(table_outputs(out), [vehicle])
     veh = load_vehicle(vehicle) if vehicle else None
     start = time.perf_counter()
     with progress_bar(f"simulating {scenario}", None) as advance:

@@ -59,7 +59,25 @@ def decode_signal(
     source: str,
     column: str,
 ) -> tuple[FloatArray, FloatArray]:
-    """The physical values (DBC scaling, DBC unit) of ``message.signal`` and their times.
+    """The physical values and times of ``message.signal`` (see :func:`decode_signal_rows`)."""
+    t_sig, values, _ = decode_signal_rows(db, message, signal, t, ids, payloads, source=source,
+                                          column=column)
+    return t_sig, values
+
+
+def decode_signal_rows(
+    db: Any,
+    message: str,
+    signal: str,
+    t: FloatArray,
+    ids: NDArray[Any],
+    payloads: NDArray[Any],
+    *,
+    source: str,
+    column: str,
+) -> tuple[FloatArray, FloatArray, NDArray[np.intp]]:
+    """The physical values (DBC scaling, DBC unit) of ``message.signal``, their times and the
+    indices (from 0) of the frames they came from.
 
     Frames whose id is not the message's are skipped; extended ids are compared without the
     extended-frame flag.  A message or signal the DBC lacks, or a payload that cannot be
@@ -74,10 +92,13 @@ def decode_signal(
     if signal not in [s.name for s in msg.signals]:
         raise InputError(source, f"DBC signal {signal!r} not in message {message!r}: expected "
                          "one of " + ", ".join(s.name for s in msg.signals), column=column)
-    id_values = np.asarray(
-        [int(i, 16) if isinstance(i, str) else int(i) for i in np.asarray(ids).tolist()],
-        dtype=np.int64,
-    )
+    id_values = np.empty(len(ids), dtype=np.int64)
+    for n, i in enumerate(np.asarray(ids).tolist()):
+        try:
+            id_values[n] = int(i, 16) if isinstance(i, str) else int(i)
+        except (ValueError, TypeError, OverflowError):
+            raise InputError(source, f"frame {n + 1}: arbitration id {str(i)[:30]!r}: expected an "
+                             "integer or hex text", column=column) from None
     rows = np.flatnonzero((id_values & 0x1FFFFFFF) == msg.frame_id)
     values = np.empty(rows.size)
     for j, k in enumerate(rows):
@@ -91,4 +112,4 @@ def decode_signal(
             raise InputError(source, f"frame {k + 1} of {message!r} cannot be decoded ({exc})",
                              column=column) from None
         values[j] = float(decoded[signal])
-    return np.asarray(t, dtype=float)[rows], values
+    return np.asarray(t, dtype=float)[rows], values, rows

@@ -43,7 +43,9 @@ raises one :class:`InputError` line naming the map file, the column and what was
 
 from __future__ import annotations
 
+import gc
 import math
+import sys
 import tomllib
 from dataclasses import dataclass
 from pathlib import Path
@@ -286,14 +288,23 @@ def load_map(map_path: str | Path) -> SourceMap:
 # ------------------------------------------------------------------------------------------
 # sources: CSV and MDF4, each giving (time, values) per channel
 # ------------------------------------------------------------------------------------------
+# A source channel is (time s, raw values, source row numbers from 1); rows name the CSV data
+# row (header not counted) or the MDF4 sample / CAN frame, for messages.
+Channel = tuple[FloatArray, np.ndarray, IntArray]
+
+
 class _Csv:
     def __init__(self, path: str, smap: SourceMap) -> None:
+        from sideslip.drive import _check_cells, _check_names, _csv_header
+
         self.path = path
         try:
-            self.frame = pd.read_csv(path)
-        except (OSError, ValueError) as exc:
+            _check_names(_csv_header(Path(path)), path)
+            self.frame = pd.read_csv(path, low_memory=False)
+        except (OSError, ValueError, UnicodeDecodeError) as exc:
             first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-            raise InputError(path, f"cannot read as csv: {first}") from None
+            raise InputError(path, f"cannot read as csv: {first[:200]}") from None
+        _check_cells(self.frame, path)
         names = [str(c) for c in self.frame.columns]
         self.time = smap.time_channel or next(
             (c for c in ("t", "time", "timestamps", "timestamp") if c in names), None
@@ -307,14 +318,22 @@ class _Csv:
     def names(self) -> list[str]:
         return [str(c) for c in self.frame.columns]
 
-    def raw(self, channel: str, time: str | None = None) -> tuple[FloatArray, np.ndarray]:
+    def raw(self, channel: str, time: str | None = None) -> Channel:
         tcol = time or self.time
+        assert tcol is not None  # __init__ found the time column
         for name in (channel, tcol):
             if name not in self.frame.columns:
                 raise KeyError(name)
-        sub = self.frame[[tcol, channel]]
-        sub = sub[sub[channel].notna() & sub[tcol].notna()]
-        return sub[tcol].to_numpy(dtype=float) * self.smap.time_factor, sub[channel].to_numpy()
+        t_all = _numbers(self.frame[tcol].to_numpy(), self.path, tcol, "a time stamp")
+        has_value = self.frame[channel].notna().to_numpy()
+        no_time = has_value & np.isnan(t_all)
+        if no_time.any():
+            row = int(np.argmax(no_time)) + 1
+            raise InputError(self.path, f"a value of {channel!r} without a time stamp: expected a "
+                             "time in every row that holds a sample", channel=tcol, row=row)
+        keep = has_value & np.isfinite(t_all)
+        rows = np.flatnonzero(keep).astype(np.intp) + 1
+        return t_all[keep] * self.smap.time_factor, self.frame[channel].to_numpy()[keep], rows
 
 
 class _Mdf:
@@ -322,30 +341,44 @@ class _Mdf:
         from asammdf import MDF
 
         self.path = path
+        error = None
+        # a damaged file leaves a half-built reader whose __del__ fails and would print a
+        # traceback at exit: collect it here, with the unraisable-exception hook silenced
+        hook, sys.unraisablehook = sys.unraisablehook, lambda _: None
         try:
-            self.mdf = MDF(path)
-        except Exception as exc:  # asammdf raises many types on a bad file
-            first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-            raise InputError(path, f"cannot read as mdf4: {first}") from None
+            try:
+                self.mdf = MDF(path)
+            except Exception as exc:  # asammdf raises many types on a bad file
+                error = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+            if error is not None:
+                gc.collect()
+        finally:
+            sys.unraisablehook = hook
+        if error is not None:
+            raise InputError(path, f"cannot read as mdf4: {error[:200]}")
         self.smap = smap
 
     def names(self) -> list[str]:
         return [n for n in self.mdf.channels_db if n not in ("time", "t")]
 
-    def raw(self, channel: str, time: str | None = None) -> tuple[FloatArray, np.ndarray]:
-        from asammdf.blocks.utils import MdfException
-
+    def raw(self, channel: str, time: str | None = None) -> Channel:
         if channel not in self.mdf.channels_db:
             raise KeyError(channel)
         try:
             sig = self.mdf.get(channel)
-        except MdfException as exc:
-            raise InputError(self.path, f"cannot read channel: {exc}", column=channel) from None
-        return np.asarray(sig.timestamps, dtype=float), np.asarray(sig.samples)
+        except Exception as exc:  # asammdf raises many types on a damaged block
+            raise InputError(self.path, f"cannot read channel: {str(exc)[:200]}",
+                             channel=channel) from None
+        t = np.asarray(sig.timestamps, dtype=float)
+        samples = np.asarray(sig.samples)
+        if samples.shape[:1] != t.shape:
+            raise InputError(self.path, f"{samples.shape[0]} samples but {t.size} time stamps: "
+                             "expected one time stamp per sample", channel=channel)
+        return t, samples, np.arange(1, t.size + 1, dtype=np.intp)
 
 
 def _channel(src: _Csv | _Mdf, smap: SourceMap, name: str, col: str,
-             time: str | None = None) -> tuple[FloatArray, np.ndarray]:
+             time: str | None = None) -> Channel:
     try:
         return src.raw(name, time)
     except KeyError as missing:
@@ -358,27 +391,98 @@ def _channel(src: _Csv | _Mdf, smap: SourceMap, name: str, col: str,
         ) from None
 
 
-def _as_float(values: np.ndarray, smap: SourceMap, col: str, channel: str) -> FloatArray:
+def _numbers(values: np.ndarray, path: str, channel: str, what: str,
+             rows: IntArray | None = None, col: str | None = None) -> FloatArray:
+    """Raw cells as floats; text that is not a number and infinity are errors naming the row.
+
+    Empty cells (NaN) stay NaN: a sensor without a sample there.
+    """
+    from sideslip.drive import _short
+
+    if values.dtype.kind in "fiub":
+        out = values.astype(float)
+    else:
+        out = pd.to_numeric(pd.Series(values), errors="coerce").to_numpy(dtype=float)
+        bad = np.isnan(out) & pd.Series(values).notna().to_numpy()
+        if bad.any():
+            k = int(np.argmax(bad))
+            raise InputError(path, f"expected {what}, got {_short(values[k])}", channel=channel,
+                             column=col, row=int(rows[k]) if rows is not None else k + 1)
+    inf = np.isinf(out)
+    if inf.any():
+        k = int(np.argmax(inf))
+        raise InputError(path, f"expected {what} (finite) or an empty cell, got {out[k]}",
+                         channel=channel, column=col,
+                         row=int(rows[k]) if rows is not None else k + 1)
+    return out
+
+
+def _as_float(values: np.ndarray, rows: IntArray, src: str, smap: SourceMap, col: str,
+              channel: str) -> FloatArray:
     if values.ndim > 1:
         raise InputError(smap.path, f"channel {channel!r} holds {values.shape[1]} values per "
                          "sample: expected a scalar channel (raw CAN goes through [can])",
                          column=col)
-    out = pd.to_numeric(pd.Series(values), errors="coerce").to_numpy(dtype=float)
+    cm = next((c for c in smap.columns if c.column == col), None)
+    unit = f"a number in {cm.unit}" if cm is not None else "a number"
+    out = _numbers(values, src, channel, unit, rows, col)
     if np.isnan(out).all() and out.size:
         raise InputError(smap.path, f"channel {channel!r} holds no numbers: expected a numeric "
                          "channel", column=col)
     return out
 
 
-def _sorted(t: FloatArray, v: np.ndarray) -> tuple[FloatArray, np.ndarray]:
-    if t.size > 1 and (np.diff(t) < 0).any():
-        order = np.argsort(t, kind="stable")
-        return t[order], v[order]
-    return t, v
+def _in_time_order(t: FloatArray, v: FloatArray, rows: IntArray, src: str, channel: str,
+                   col: str) -> tuple[FloatArray, FloatArray, int]:
+    """Check a channel's time stamps increase; drop exact repeats (same time, same value).
+
+    A stamp earlier than the one before, or a repeated stamp with another value, is an error
+    naming the source row (as ``estimate`` rejects time that is not strictly increasing): the
+    order of the recording is broken and no choice of rows would be right.  A sample logged
+    twice (same stamp and value) is dropped; the count is returned for a warning.
+    """
+    if t.size < 2:
+        return t, v, 0
+    step = np.diff(t)
+    back = step < 0
+    if back.any():
+        k = int(np.argmax(back)) + 1
+        raise InputError(src, f"time goes backwards, {t[k]:.9g} s after {t[k - 1]:.9g} s: expected "
+                         "increasing time stamps", channel=channel, column=col, row=int(rows[k]))
+    same = step == 0
+    if not same.any():
+        return t, v, 0
+    clash = same & ~((v[1:] == v[:-1]) | (np.isnan(v[1:]) & np.isnan(v[:-1])))
+    if clash.any():
+        k = int(np.argmax(clash)) + 1
+        raise InputError(src, f"two samples at {t[k]:.9g} s ({v[k - 1]:g} and {v[k]:g}): expected "
+                         "one sample per time stamp", channel=channel, column=col, row=int(rows[k]))
+    keep = np.r_[True, ~same]
+    return t[keep], v[keep], int(np.count_nonzero(same))
 
 
-def read_mapped(path: str | Path, smap: SourceMap, fmt: str) -> dict[str, tuple[FloatArray, FloatArray]]:
-    """Every mapped column as (time s, value in SI) of its own samples (no alignment yet)."""
+def _limits(col: str, v: FloatArray, rows: IntArray, src: str, channel: str, unit: str) -> None:
+    """Contract section 5's evident-unit limits on the converted values, naming the source row."""
+    from sideslip.drive import LIMITS
+
+    for names, limit, what in LIMITS:
+        if col in names:
+            over = np.abs(np.nan_to_num(v)) > limit
+            if over.any():
+                k = int(np.argmax(over))
+                raise InputError(src, f"value {v[k]:g} is beyond {limit:g}: expected {what} "
+                                 f"(the map says {unit})", channel=channel, column=col,
+                                 row=int(rows[k]))
+
+
+def read_mapped(path: str | Path, smap: SourceMap, fmt: str,
+                warnings: list[str] | None = None) -> dict[str, tuple[FloatArray, FloatArray]]:
+    """Every mapped column as (time s, value in SI) of its own samples (no alignment yet).
+
+    Bad cells, infinity, time going backwards and evident unit mistakes are errors naming the
+    source file, channel, column and row; samples logged twice are dropped with a line in
+    ``warnings``.
+    """
     if fmt not in FORMATS_MAPPED:
         raise InputError(str(path), f"format {fmt!r} unknown: expected one of "
                          + ", ".join(FORMATS_MAPPED))
@@ -389,31 +493,44 @@ def read_mapped(path: str | Path, smap: SourceMap, fmt: str) -> dict[str, tuple[
     frames = None
     for cm in smap.columns:
         if cm.channel is not None:
-            t, raw = _channel(src, smap, cm.channel, cm.column, cm.time)
-            values = _as_float(raw, smap, cm.column, cm.channel)
+            t, raw, rows = _channel(src, smap, cm.channel, cm.column, cm.time)
+            values = _as_float(raw, rows, str(path), smap, cm.column, cm.channel)
+            channel = cm.channel
         else:
-            from sideslip.io.dbc import decode_signal, load_dbc
+            from sideslip.io.dbc import decode_signal_rows, load_dbc
 
             if frames is None:
                 can = smap.can
-                t_id, ids = _channel(src, smap, can["id"], cm.column)
-                t_data, data = _channel(src, smap, can["data"], cm.column)
+                t_id, ids, id_rows = _channel(src, smap, can["id"], cm.column)
+                t_data, data, _ = _channel(src, smap, can["data"], cm.column)
                 if t_id.size != t_data.size:
                     raise InputError(smap.path, f"[can] id and data channels differ in length "
                                      f"({t_id.size} vs {t_data.size}): expected one row per "
                                      "frame", column=cm.column)
                 keep = np.ones(t_id.size, dtype=bool)
                 if "bus" in can:
-                    _, bus = _channel(src, smap, str(can["bus"]), cm.column)
-                    keep = _as_float(bus, smap, cm.column, str(can["bus"])) == float(
-                        can.get("bus_value", 0))
+                    _, bus, bus_rows = _channel(src, smap, str(can["bus"]), cm.column)
+                    if bus.shape[:1] != t_id.shape:
+                        raise InputError(smap.path, "[can] bus channel differs in length from id: "
+                                         "expected one bus number per frame", column=cm.column)
+                    keep = _as_float(bus, bus_rows, str(path), smap, cm.column,
+                                     str(can["bus"])) == float(can.get("bus_value", 0))
                 frames = (t_id[keep], np.asarray(ids)[keep], np.asarray(data)[keep],
-                          load_dbc(can["dbc"]))
+                          load_dbc(can["dbc"]), id_rows[keep])
             assert cm.message is not None and cm.signal is not None
-            t, values = decode_signal(frames[3], cm.message, cm.signal, frames[0], frames[1],
-                                      frames[2], source=smap.path, column=cm.column)
+            t, values, k = decode_signal_rows(frames[3], cm.message, cm.signal, frames[0],
+                                              frames[1], frames[2], source=smap.path,
+                                              column=cm.column)
+            rows = frames[4][k]
+            channel = f"{cm.message}.{cm.signal}"
+        t = np.asarray(t, dtype=float)
         ok = np.isfinite(values) & np.isfinite(t)
-        t_ok, v_ok = _sorted(np.asarray(t, dtype=float)[ok], values[ok] * cm.factor)
+        v_si = values[ok] * cm.factor
+        _limits(cm.column, v_si, rows[ok], str(path), channel, cm.unit)
+        t_ok, v_ok, repeated = _in_time_order(t[ok], v_si, rows[ok], str(path), channel, cm.column)
+        if repeated and warnings is not None:
+            warnings.append(f"{path}: channel '{channel}': column '{cm.column}': {repeated} "
+                            "sample(s) logged twice (same time stamp and value) dropped")
         out[cm.column] = (t_ok, np.asarray(v_ok, dtype=float))
     return out
 
@@ -442,6 +559,10 @@ def align(series: dict[str, tuple[FloatArray, FloatArray]], base: str | None,
         pl = place_samples(base_t, t)
         cols[name] = pl.spread(v, base_t.size)
         report[name] = {"samples": int(t.size), "moved": pl.moved, "dropped": pl.dropped}
+        if pl.dropped:
+            report.setdefault("warnings", []).append(
+                f"{source}: column '{name}': {pl.dropped} of {t.size} sample(s) dropped (outside "
+                f"the time span of the base column '{base}' or no free row near them)")
     return cols, report
 
 
@@ -452,9 +573,12 @@ def convert_mapped(path: str | Path, map_path: str | Path, fmt: str) -> Drive:
     column with the most samples); see :func:`place_samples` for the slower sensors.
     """
     smap = load_map(map_path)
-    series = read_mapped(path, smap, fmt)
+    warnings: list[str] = []
+    series = read_mapped(path, smap, fmt, warnings)
     cols, report = align(series, smap.base, str(path))
+    warnings += report.pop("warnings", [])
     meta = {
+        "warnings": warnings,
         "source": f"{fmt}:{Path(path).name}",
         "map": str(map_path),
         "alignment": report,
