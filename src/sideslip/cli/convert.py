@@ -20,7 +20,7 @@ def convert_cmd(
     map_path: Annotated[Path | None, typer.Option("--map", help="Channel map TOML (mdf4, csv).")] = None,
     vehicle: Annotated[str | None, typer.Option("--vehicle", help="Vehicle preset or TOML.")] = None,
 ) -> None:
-    """Turn an outside recording into a drive.  Formats: comma2k19, mdf4, csv."""
+    """Turn an outside recording into a drive.  Formats: comma2k19, revs, mdf4, csv."""
     from sideslip.drive import save_drive
     from sideslip.io import FORMATS, convert
     from sideslip.vehicle import load_vehicle
