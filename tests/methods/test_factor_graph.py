@@ -474,3 +474,25 @@ def test_auto_choice_on_the_lap_survives_mems_grade_sensor_errors(revs_lap):
     e_clean = _rmse_deg(clean["beta"] - revs_lap["ref_beta"])
     e_noisy = _rmse_deg(noisy_est["beta"] - revs_lap["ref_beta"])
     assert e_noisy < 1.05 * e_clean
+
+
+def test_graph_kalman_kernel_equals_the_numpy_reference_filter():
+    # The compiled filter (filters.kalman's workspace kernels) against filters.kalman's plain
+    # numpy predict / Joseph update, factor by factor, on a drive with gaps and standstill.
+    from sideslip.filters.kalman import predict, update_joseph
+    from sideslip.methods.factor_graph import solve_kalman
+
+    graph = sideslip_graph(_awkward_drive().slice(0, 1500), VEHICLE, EXACT)
+    x_nb, var_nb, cov_nb, nu_nb, s_nb = solve_kalman(graph)
+    x, P = graph.x0.copy(), np.diag(graph.sigma0**2)
+    for k in range(graph.Hu.shape[0]):
+        for m in np.flatnonzero(graph.wu[k] > 0):
+            x, P, nu, S = update_joseph(x, P, graph.zu[k, m:m + 1], graph.Hu[k, m][None, :],
+                                        np.array([[1.0 / graph.wu[k, m]]]))  # fmt: skip
+            assert nu[0] == pytest.approx(nu_nb[k, m], rel=1e-9, abs=1e-12)
+            assert S[0, 0] == pytest.approx(s_nb[k, m], rel=1e-9)
+        np.testing.assert_allclose(x_nb[k], x, rtol=1e-9, atol=1e-12)
+        np.testing.assert_allclose(var_nb[k], np.diag(P), rtol=1e-9, atol=1e-15)
+        assert cov_nb[k] == pytest.approx(P[0, 1], rel=1e-8, abs=1e-15)
+        if k < graph.Hu.shape[0] - 1:
+            x, P = predict(x, P, graph.F[k], np.diag(1.0 / graph.wq[k]), np.eye(2), graph.g[k])

@@ -92,10 +92,9 @@ from sideslip.methods.fg_tuning import (
     SIGMA_FIELDS,
     WINDOW_S,
     Tuning,
-    block_nis,
+    block_consistency,
     chain_kalman,
     choose_sigmas,
-    graph_consistency,
 )
 from sideslip.methods.registry import SPEED, register
 from sideslip.models.single_track import continuous_arrays
@@ -414,8 +413,7 @@ def sideslip_graph(
     drive: Drive, vehicle: Vehicle, settings: FactorGraphSettings = DEFAULT_SETTINGS
 ) -> SideslipGraph:
     """The whole seed-002 graph of ``drive`` (used by fg_batch, kf_linear and the peers)."""
-    prep = prepare(drive, vehicle, settings)
-    return prep.graph if prep.graph is not None else build_graph(prep.inputs, vehicle, prep.settings)
+    return _graph(prepare(drive, vehicle, settings), vehicle)
 
 
 def _graph(prep: Prepared, vehicle: Vehicle) -> SideslipGraph:
@@ -492,7 +490,7 @@ def _estimate(
     """Series, params and the consistency-inflated 1-sigma of one of the three methods.
 
     ``innovations``: the graph's Kalman-filter innovations and their variances (N, 3), tested
-    in blocks (:func:`sideslip.methods.fg_tuning.block_nis`) over 2 s windows, trailing for the
+    in blocks (:func:`sideslip.methods.fg_tuning.block_consistency`) over 2 s windows, trailing for the
     on-line kf_linear and fg_lag, centred for fg_batch; None when ``settings.consistency`` is
     off.  Where a window fails, the variances of beta and r are multiplied by its NIS ratio.
     """
@@ -509,8 +507,7 @@ def _estimate(
     inn: dict[str, FloatArray] = {}
     if innovations is not None:
         nu, S = innovations
-        nis, dof = block_nis(drive.t, nu[:, :2], S[:, :2])
-        check = graph_consistency(drive.t, nis, dof, causal)
+        check = block_consistency(drive.t, nu[:, :2], S[:, :2], causal)
         var = var * check.inflation[:, None]
         out["health"] = check.health
         params["health"] = {**check.summary(drive.t), "test": (

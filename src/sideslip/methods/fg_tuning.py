@@ -22,9 +22,10 @@ prediction is dominated by the model, not by the last gyro sample.  Cost: one fi
 per candidate plus ``horizon / stride`` propagations per row, O(N) (10 candidates).
 
 Consistency.  Whatever the tuning, the model can stop fitting somewhere (tyres at the limit,
-a wrong vehicle file, a banked road).  :func:`graph_consistency` turns per-row normalised
-residuals into the windowed NIS test of :func:`sideslip.filters.consistency.nis_consistency`
-(inflation of the variance where the window's NIS exceeds its chi^2 bound, and ``health``).
+a wrong vehicle file, a banked road).  :func:`block_consistency` sums the graph's Kalman
+innovations over short blocks and tests them with the windowed NIS of
+:func:`sideslip.filters.consistency.nis_consistency` (inflation of the variance where the
+window's NIS exceeds its chi^2 bound, and ``health``).
 """
 
 from __future__ import annotations
@@ -38,7 +39,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sideslip.filters.consistency import Consistency, nis_consistency
-from sideslip.filters.kalman import predict_nb, update_scalar_nb
+from sideslip.filters.kalman import predict_ws_nb, update_scalar_ws_nb
 
 FloatArray = NDArray[np.float64]
 
@@ -108,6 +109,7 @@ def gyro_prediction_error(
     x = x0.copy()
     P = P0.copy()
     Q = np.zeros((nx, nx))
+    work = np.empty((2 * nx + 2, nx))
     y = np.zeros(nx)
     sse = 0.0
     count = 0
@@ -119,7 +121,7 @@ def gyro_prediction_error(
             innov = zu[k, m]
             for i in range(nx):
                 innov -= Hu[k, m, i] * x[i]
-            update_scalar_nb(x, P, innov, Hu[k, m], 1.0 / w)
+            update_scalar_ws_nb(x, P, innov, Hu[k, m], 1.0 / w, work)
         e = k + horizon
         if k % stride == 0 and e < n and wu[e, 0] != 0.0 and score[e]:
             for i in range(nx):
@@ -141,7 +143,7 @@ def gyro_prediction_error(
         if k < n - 1:
             for i in range(nx):
                 Q[i, i] = 1.0 / wq[k, i]
-            predict_nb(x, P, F[k], Q, g[k])
+            predict_ws_nb(x, P, F[k], Q, g[k], work)
     return sse, count
 
 
@@ -157,7 +159,7 @@ def chain_kalman(
     P0: FloatArray,
 ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
     """Linear KF: Joseph-form scalar updates with each present unary factor, then predict
-    (:func:`sideslip.filters.kalman.update_scalar_nb`, :func:`~sideslip.filters.kalman.predict_nb`).
+    (:func:`sideslip.filters.kalman.update_scalar_ws_nb`, :func:`~sideslip.filters.kalman.predict_ws_nb`).
 
     Returns the filtered means and variances (N, 2), the beta-r covariance (N,), and each
     factor's innovation and its variance S (N, M; NaN where the factor is absent).
@@ -168,6 +170,7 @@ def chain_kalman(
     x = x0.copy()
     P = P0.copy()
     Q = np.zeros((nx, nx))
+    work = np.empty((2 * nx + 2, nx))
     xs = np.zeros((n, nx))
     vs = np.zeros((n, nx))
     cs = np.zeros(n)
@@ -181,7 +184,7 @@ def chain_kalman(
             innov = zu[k, m]
             for i in range(nx):
                 innov -= Hu[k, m, i] * x[i]
-            ss[k, m] = update_scalar_nb(x, P, innov, Hu[k, m], 1.0 / w)
+            ss[k, m] = update_scalar_ws_nb(x, P, innov, Hu[k, m], 1.0 / w, work)
             nu[k, m] = innov
         for i in range(nx):
             xs[k, i] = x[i]
@@ -190,7 +193,7 @@ def chain_kalman(
         if k < n - 1:
             for i in range(nx):
                 Q[i, i] = 1.0 / wq[k, i]
-            predict_nb(x, P, F[k], Q, g[k])
+            predict_ws_nb(x, P, F[k], Q, g[k], work)
     return xs, vs, cs, nu, ss
 
 
@@ -254,10 +257,10 @@ BLOCK_S = 0.25  # s: innovations are summed over blocks this long before the chi
 WINDOW_S = 2.0  # s: sliding window of the NIS test (8 blocks per factor)
 
 
-def block_nis(
-    t: FloatArray, innov: FloatArray, S: FloatArray, block_s: float = BLOCK_S
-) -> tuple[FloatArray, FloatArray]:
-    """Per-row NIS and dof of block sums of a Kalman filter's innovations.
+def block_consistency(
+    t: FloatArray, innov: FloatArray, S: FloatArray, causal: bool, block_s: float = BLOCK_S
+) -> Consistency:
+    """Windowed NIS test of block sums of a Kalman filter's innovations, per row.
 
     Under the filter's model the innovations nu_k are white with variances S_k, so over a
     block the sum  z = sum nu_k / sqrt(sum S_k)  is N(0, 1) and z^2 ~ chi^2(1)
@@ -265,16 +268,15 @@ def block_nis(
     (tyres past their linear range, a wrong stiffness, a bank) hardly changes a single
     innovation at 100 Hz but biases many in a row, which the block sum shows sqrt(block)
     times more clearly than the per-sample NIS.  ``innov``, ``S``: (N, M), NaN where a factor
-    had no update.  Each block's z^2 (one per factor) is spread over its rows (nis z^2 / n,
-    dof 1 / n), so windowed sums count blocks.  O(N).
+    had no update.  The blocks' z^2 (one per factor and block, dof 1 each) go through
+    :func:`sideslip.filters.consistency.nis_consistency` over ``WINDOW_S`` windows (chi^2 99 %)
+    at the blocks' start times, and its result is held over each block's rows.  O(N).
     """
     n, n_fac = innov.shape
-    edges = np.floor((t - t[0]) / block_s).astype(np.int64)
-    nis = np.zeros(n)
-    dof = np.zeros(n)
-    start = np.flatnonzero(np.r_[True, np.diff(edges) != 0])
-    rows_per_block = np.diff(np.r_[start, n]).astype(float)
-    block_of_row = np.repeat(np.arange(start.size), rows_per_block.astype(np.int64))
+    block = np.floor((t - t[0]) / block_s).astype(np.int64)
+    start = np.flatnonzero(np.r_[True, np.diff(block) != 0])
+    nis = np.zeros(start.size)
+    dof = np.zeros(start.size)
     for m in range(n_fac):
         ok = np.isfinite(innov[:, m]) & np.isfinite(S[:, m])
         if not ok.any():
@@ -282,14 +284,9 @@ def block_nis(
         sum_nu = np.add.reduceat(np.where(ok, innov[:, m], 0.0), start)
         sum_s = np.add.reduceat(np.where(ok, S[:, m], 0.0), start)
         has = sum_s > 0.0
-        z2 = np.where(has, sum_nu**2 / np.where(has, sum_s, 1.0), 0.0)
-        nis += (z2 / rows_per_block)[block_of_row]
-        dof += (has / rows_per_block)[block_of_row]
-    return nis, dof
-
-
-def graph_consistency(
-    t: FloatArray, nis: FloatArray, dof: FloatArray, causal: bool
-) -> Consistency:
-    """Windowed NIS (2 s, chi^2 99 %) of the block NIS of :func:`block_nis`."""
-    return nis_consistency(t, nis, dof, window_s=WINDOW_S, causal=causal)
+        nis += np.where(has, sum_nu**2 / np.where(has, sum_s, 1.0), 0.0)
+        dof += has
+    check = nis_consistency(t[start], nis, dof, window_s=WINDOW_S, causal=causal)
+    rows = np.repeat(np.arange(start.size), np.diff(np.r_[start, n]))
+    return Consistency(check.mean_nis[rows], check.inflation[rows], check.health[rows],
+                       check.flagged[rows], check.bound[rows])  # fmt: skip
