@@ -273,6 +273,26 @@ def main() -> None:
         "",
     ]
     before_after(lines)
+    lines += [
+        "How \"auto\" chooses (src/sideslip/methods/fg_tuning.py): for each of 10 candidate "
+        "pairs (a_y-factor sigma 0.2 ... 7 m/s^2, beta-model sigma 1e-3 or 4e-3) the graph's "
+        "Kalman filter runs over the drive and, every 5 rows, its state is propagated 0.3 s "
+        "ahead with the model and the steering alone and compared with the gyro there; the "
+        "pair with the least squared error wins.  Plain innovation likelihood would pick a "
+        "small a_y sigma (the model error is slow, not white).  The yaw-rate sigmas are not "
+        "searched (the criterion drifts to the grid's edge for them) and take the paper's "
+        "values; the grid's ends are the physics preset and the paper's values, so \"auto\" "
+        "chooses between \"trust the a_y factor\" (banked roads, where only the dynamics see "
+        "the bank) and \"trust the dynamics\" (tyres past linear, a wrong stiffness).",
+        "",
+        "Honest 1-sigma: block sums (0.25 s) of the filter's gyro and a_y innovations, chi^2 "
+        "99 % over 2 s windows, inflate the variance where they fail (`health`); a uniform "
+        "error of the file's cornering stiffness cannot be seen by any test on these sensors, "
+        "so `stiffness_rel_sigma` (0.3) x the larger axle slip angle is added to beta's "
+        "variance.  The shares near 1.00 say the bands are wide (conservative) on drives whose "
+        "file is right.",
+        "",
+    ]
     tuning_cost(lines)
     lines += [
         "## beta accuracy (deg; contract metric `beta_rmse_deg`, rows above "
