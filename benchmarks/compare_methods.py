@@ -29,6 +29,21 @@ SCENARIOS = (
     "cr_step_steer", "cr_slalom", "cr_circle",
 )  # fmt: skip
 OUT = Path(__file__).parent / "results" / "compare_methods.md"
+# Real drives, run when their data folder is present (../shared/data beside the repo); not in
+# the mean (most methods need GNSS or wheel speeds the lap lacks).  name -> (folder, vehicle).
+REVS_LAP = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "revs_250lm_20140222"
+REAL_DRIVES = {"revs_lap": (REVS_LAP, "revs_250lm")}
+
+
+def load_scenario(name: str, seed: int) -> tuple[object, object]:
+    """A scenario's drive and its right vehicle file (simulated, or a real drive converted)."""
+    if name in REAL_DRIVES:
+        from sideslip.io import convert
+
+        folder, vehicle = REAL_DRIVES[name]
+        return convert("revs", folder, None, None), load_vehicle(vehicle)
+    drive = simulate(name, seed=seed)
+    return drive, load_vehicle(drive.meta["vehicle"])
 
 
 def two_sigma_share(drive: object, est: object) -> float | None:
@@ -41,14 +56,14 @@ def two_sigma_share(drive: object, est: object) -> float | None:
 
 
 def run(seed: int, only_methods: list[str] | None = None, only_scenarios: list[str] | None = None) -> str:
-    scenarios = tuple(only_scenarios) if only_scenarios else SCENARIOS
+    real = tuple(k for k, (folder, _) in REAL_DRIVES.items() if folder.is_dir())
+    scenarios = tuple(only_scenarios) if only_scenarios else SCENARIOS + real
     methods = [m for m in all_methods() if not only_methods or m in only_methods]
     table: dict[float, dict[str, dict[str, float]]] = {1.0: {}, 0.7: {}}
     share: dict[float, dict[str, dict[str, float]]] = {1.0: {}, 0.7: {}}
     start = time.perf_counter()
     for scenario in scenarios:
-        drive = simulate(scenario, seed=seed)
-        base = load_vehicle(drive.meta["vehicle"])
+        drive, base = load_scenario(scenario, seed)
         for factor in (1.0, 0.7):
             vehicle = base.with_changes(cf=factor * base.cf, cr=factor * base.cr)
             row: dict[str, float] = {}
@@ -74,8 +89,10 @@ def run(seed: int, only_methods: list[str] | None = None, only_scenarios: list[s
         f"Measured {dt.datetime.now(dt.UTC):%Y-%m-%d %H:%M} UTC by `benchmarks/compare_methods.py`, "
         f"seed {seed}.  Sideslip RMSE in degrees on rows faster than {SPEED_GATE:g} m/s; the best "
         "method of each scenario in bold.  `cr_*` scenarios come from CommonRoad's multi-body "
-        "model (an independent truth; vehicle file derived from its parameter set).  The mean "
-        "is over the scenarios every method can run.",
+        "model (an independent truth; vehicle file derived from its parameter set).  `revs_lap` "
+        "is seed 002's real lap (Stanford Revs Ferrari 250 LM, `sideslip convert revs`, vehicle "
+        "`revs_250lm`), run when ../shared/data is present.  The mean is over the simulated "
+        "scenarios, for methods that can run them all.",
         "",
     ]
     for factor, title in ((1.0, "right vehicle file"), (0.7, "cornering stiffness 30 % low in the vehicle file")):
@@ -96,8 +113,9 @@ def run(seed: int, only_methods: list[str] | None = None, only_scenarios: list[s
                     cells.append(f"**{v:.3f}**")
                 else:
                     cells.append(f"{v:.3f}" if v < 100 else f"{v:.0f}")
-            finite = [v for v in vals if v is not None]
-            mean = float(np.mean(finite)) if len(finite) == len(SCEN) else math.nan
+            sim = [v for sc, v in zip(SCEN, vals, strict=True) if sc not in REAL_DRIVES]
+            finite = [v for v in sim if v is not None]
+            mean = float(np.mean(finite)) if finite and len(finite) == len(sim) else math.nan
             means[name] = mean
             lines.append(f"| {name} | " + " | ".join(cells) + (f" | {mean:.3f} |" if math.isfinite(mean) else " | – |"))
         ranked = sorted((v, k) for k, v in means.items() if math.isfinite(v))

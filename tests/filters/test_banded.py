@@ -131,8 +131,8 @@ def test_fixed_lag_equals_batch_on_data_up_to_k_plus_lag(lag):
     n, nx = 14, 2
     F, g, wq, Hu, zu, wu, lam0, eta0 = _random_chain(rng, n, nx, 3)
     F *= 0.5  # keep the random dynamics tame so the comparison is well conditioned
-    x, var, ok, _, _ = fixed_lag_chain(F, g, wq, Hu, zu, wu, lam0, eta0, lag)
-    assert ok
+    x, var, cov, ok, _, _ = fixed_lag_chain(F, g, wq, Hu, zu, wu, lam0, eta0, lag)
+    assert ok and cov.shape == (n, nx - 1)
     for k in range(n):
         e = min(k + lag, n - 1)
         ab, rhs = assemble_chain(
@@ -142,6 +142,8 @@ def test_fixed_lag_equals_batch_on_data_up_to_k_plus_lag(lag):
         sb = selected_inverse(cb)
         np.testing.assert_allclose(x[k], xb[k * nx : (k + 1) * nx], rtol=1e-9, atol=1e-10)
         np.testing.assert_allclose(var[k], sb[0, k * nx : (k + 1) * nx], rtol=1e-9, atol=1e-12)
+        # the beta-r style covariance of the state's two components: S[2k + 1, 2k]
+        np.testing.assert_allclose(cov[k, 0], sb[1, k * nx], rtol=1e-9, atol=1e-12)
 
 
 @pytest.mark.parametrize("lag", [0, 2, 5])
@@ -151,14 +153,14 @@ def test_fixed_lag_streamed_in_chunks_equals_one_pass(lag):
     n, nx = 40, 2
     F, g, wq, Hu, zu, wu, lam0, eta0 = _random_chain(rng, n, nx, 3)
     F *= 0.5
-    whole, var_whole, ok, _, _ = fixed_lag_chain(F, g, wq, Hu, zu, wu, lam0, eta0, lag)
+    whole, var_whole, _, ok, _, _ = fixed_lag_chain(F, g, wq, Hu, zu, wu, lam0, eta0, lag)
     assert ok
     lam, eta = lam0, eta0
     parts, var_parts = [], []
     for a in range(0, n, 7):
         b = min(a + 7, n)
         e = min(b + max(lag, 1), n)  # one row beyond the chunk carries the dynamic factor
-        x, var, ok, lam, eta = fixed_lag_chain(
+        x, var, _, ok, lam, eta = fixed_lag_chain(
             F[a : e - 1], g[a : e - 1], wq[a : e - 1], Hu[a:e], zu[a:e], wu[a:e], lam, eta, lag,
             b - a,
         )  # fmt: skip

@@ -28,7 +28,7 @@ def convert_cmd(
         typer.Option("--template", metavar="FORMAT", help="Print a commented map for csv, mdf4 or rosbag."),
     ] = None,
 ) -> None:
-    """Turn an outside recording into a drive.  Formats: comma2k19, csv, mdf4, rosbag.
+    """Turn an outside recording into a drive.  Formats: comma2k19, csv, mdf4, revs, rosbag.
 
     Start a map with `sideslip convert --template csv > map.toml` (or mdf4, rosbag).
     """

@@ -240,7 +240,7 @@ def fixed_lag_chain(
     eta0: FloatArray,
     lag: int,
     n_out: int = -1,
-) -> tuple[FloatArray, FloatArray, bool, FloatArray, FloatArray]:
+) -> tuple[FloatArray, FloatArray, FloatArray, bool, FloatArray, FloatArray]:
     """Fixed-lag smoother on the chain problem: state k estimated from the data up to k + lag.
 
     A window holds the states s .. s+lag (``lag`` dynamic steps, as the paper's window of 5
@@ -257,9 +257,11 @@ def fixed_lag_chain(
     ``(Lam, eta)`` on state ``n_out`` continues the smoother on the next chunk; chunked and
     whole runs give identical results.  ``n_out = -1`` (default) outputs all N states.
 
-    Returns ``(x, var, ok, Lam, eta)``: (n_out, nx) estimates, (n_out, nx) marginal
-    variances, False if a window was not positive definite (then the remaining rows repeat the
-    last estimate), and the prior on the next state.
+    Returns ``(x, var, cov, ok, Lam, eta)``: (n_out, nx) estimates, (n_out, nx) marginal
+    variances, (n_out, nx - 1) covariances of neighbouring components (cov[k, i] between
+    components i + 1 and i of state k; for nx = 2 the whole off-diagonal), False if a window
+    was not positive definite (then the remaining rows repeat the last estimate), and the
+    prior on the next state.
     """
     N = Hu.shape[0]
     M = Hu.shape[1]
@@ -269,6 +271,7 @@ def fixed_lag_chain(
     p = 2 * nx - 1
     x_out = np.zeros((n_out, nx))
     var_out = np.zeros((n_out, nx))
+    cov_out = np.zeros((n_out, max(nx - 1, 0)))
     Lam = Lam0.copy()
     eta = eta0.copy()
     size = -1
@@ -295,12 +298,15 @@ def fixed_lag_chain(
             for r in range(s, n_out):
                 x_out[r] = x_out[max(s - 1, 0)]
                 var_out[r] = var_out[max(s - 1, 0)]
-            return x_out, var_out, False, Lam, eta
+                cov_out[r] = cov_out[max(s - 1, 0)]
+            return x_out, var_out, cov_out, False, Lam, eta
         _solve_band_inplace(ab, rhs)
         _selected_inverse_into(ab, sb)
         for i in range(nx):
             x_out[s, i] = rhs[i]
             var_out[s, i] = sb[0, i]
+        for i in range(nx - 1):
+            cov_out[s, i] = sb[1, i]
         if s == N - 1:
             break
         # Marginalise x_s: information of (x_s, x_{s+1}) from the factors touching x_s:
@@ -340,7 +346,8 @@ def fixed_lag_chain(
             for r in range(s + 1, n_out):
                 x_out[r] = x_out[s]
                 var_out[r] = var_out[s]
-            return x_out, var_out, False, Lam, eta
+                cov_out[r] = cov_out[s]
+            return x_out, var_out, cov_out, False, Lam, eta
         for i in range(nx):
             acc = wq[s, i] * g[s, i]
             for c in range(nx):
@@ -353,7 +360,7 @@ def fixed_lag_chain(
                 v = (wq[s, i] if i == j else 0.0) - acc
                 Lam[i, j] = v
                 Lam[j, i] = v
-    return x_out, var_out, True, Lam, eta
+    return x_out, var_out, cov_out, True, Lam, eta
 
 
 @numba.njit(cache=True)

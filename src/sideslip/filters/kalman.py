@@ -5,10 +5,11 @@ ones; nothing is configured by assigning attributes.  Two flavours of the same e
 
 * numpy functions (:func:`predict`, :func:`update_joseph`) for any dimension, used outside
   hot loops and by tests;
-* numba kernels (:func:`predict_nb`, :func:`update_scalar_nb`) for recursive loops over a
-  drive: a vector measurement with independent noise components is processed as a sequence
-  of scalar updates, which is algebraically the same as the batch update and needs no matrix
-  inversion.
+* numba kernels (:func:`predict_nb`, :func:`update_scalar_nb`, and their ``_ws_nb`` forms
+  that take caller-owned scratch space so a loop over a drive allocates nothing) for
+  recursive loops over a drive: a vector measurement with independent noise components is
+  processed as a sequence of scalar updates, which is algebraically the same as the batch
+  update and needs no matrix inversion.
 
 Notation (Simon, *Optimal State Estimation*, ch. 5; seed 001 eqs 2-3):
 
@@ -83,27 +84,36 @@ def update_joseph(
 def predict_nb(x: NDArray, P: NDArray, F: NDArray, Q: NDArray, Gu: NDArray) -> None:
     """In place: ``x <- F x + Gu``, ``P <- F P F' + Q`` (``Gu`` the already-multiplied input).
 
-    Written as explicit loops (no temporaries but two small work arrays) for the per-row use.
+    Allocates its scratch space; loops over many rows use :func:`predict_ws_nb`.
     """
     n = x.size
-    xn = np.empty(n)
-    FP = np.empty((n, n))
+    predict_ws_nb(x, P, F, Q, Gu, np.empty((2 * n + 2, n)))
+
+
+@numba.njit(cache=True, inline="always")
+def predict_ws_nb(
+    x: NDArray, P: NDArray, F: NDArray, Q: NDArray, Gu: NDArray, work: NDArray
+) -> None:
+    """:func:`predict_nb` with caller-owned scratch ``work`` of shape (2 n + 2, n) (the shape
+    :func:`update_scalar_ws_nb` needs, so one buffer serves both): explicit loops, no
+    allocation (the per-row use in compiled filter loops)."""
+    n = x.size
     for i in range(n):
         acc = Gu[i]
         for j in range(n):
             acc += F[i, j] * x[j]
-        xn[i] = acc
+        work[0, i] = acc
         for j in range(n):
             acc = 0.0
             for k in range(n):
                 acc += F[i, k] * P[k, j]
-            FP[i, j] = acc
+            work[2 + i, j] = acc
     for i in range(n):
-        x[i] = xn[i]
+        x[i] = work[0, i]
         for j in range(i, n):
             acc = Q[i, j]
             for k in range(n):
-                acc += FP[i, k] * F[j, k]
+                acc += work[2 + i, k] * F[j, k]
             P[i, j] = acc
     for i in range(n):
         for j in range(i):
@@ -119,39 +129,47 @@ def update_scalar_nb(
     ``innov`` is ``z - h x`` computed by the caller (so that angle measurements can be wrapped
     to [-pi, pi) first).  The covariance is the Joseph product (I - k h) P (I - k h)' + r k k'
     with k = P h' / S, formed as products (not expanded), so it stays positive semi-definite
-    under round-off and for any gain.
+    under round-off and for any gain.  Allocates its scratch space; loops over many rows use
+    :func:`update_scalar_ws_nb`.
     """
     n = x.size
-    ph = np.empty(n)
+    return update_scalar_ws_nb(x, P, innov, h, r, np.empty((2 * n + 2, n)))
+
+
+@numba.njit(cache=True, inline="always")
+def update_scalar_ws_nb(
+    x: NDArray, P: NDArray, innov: float, h: NDArray, r: float, work: NDArray
+) -> float:
+    """:func:`update_scalar_nb` with caller-owned scratch ``work`` of shape (2 n + 2, n):
+    rows 0-1 P h' and the gain, rows 2 .. n+1 (I - k h), rows n+2 .. 2n+1 (I - k h) P."""
+    n = x.size
+    s = r
     for i in range(n):
         acc = 0.0
         for j in range(n):
             acc += P[i, j] * h[j]
-        ph[i] = acc
-    s = r
+        work[0, i] = acc
+        s += h[i] * acc
     for i in range(n):
-        s += h[i] * ph[i]
-    k = ph / s
-    for i in range(n):
-        x[i] += k[i] * innov
-    # M = (I - k h) P
-    M = np.empty((n, n))
+        work[1, i] = work[0, i] / s
+        x[i] += work[1, i] * innov
     for i in range(n):
         for j in range(n):
-            acc = P[i, j]
-            for m in range(n):
-                acc -= k[i] * h[m] * P[m, j]
-            M[i, j] = acc
-    # P = M (I - k h)' + r k k'
+            work[2 + i, j] = (1.0 if i == j else 0.0) - work[1, i] * h[j]
     for i in range(n):
-        for j in range(i, n):
-            acc = r * k[i] * k[j]
-            for m in range(n):
-                acc += M[i, m] * ((1.0 if m == j else 0.0) - k[j] * h[m])
+        for j in range(n):
+            acc = 0.0
+            for c in range(n):
+                acc += work[2 + i, c] * P[c, j]
+            work[2 + n + i, j] = acc
+    # P = (I - k h) P (I - k h)' + r k k'
+    for i in range(n):
+        for j in range(i + 1):
+            acc = r * work[1, i] * work[1, j]
+            for c in range(n):
+                acc += work[2 + n + i, c] * work[2 + j, c]
             P[i, j] = acc
-    for i in range(n):
-        for j in range(i):
-            P[i, j] = P[j, i]
+            P[j, i] = acc
     return s
 
 

@@ -18,6 +18,7 @@ FORMATS: dict[str, str] = {
     "RAV4 dongle)",
     "csv": "a CSV with its own column names and units, mapped by --map MAP.toml (optional raw "
     "CAN frames decoded with a DBC)",
+    "revs": "a Stanford Revs lap folder of .txt columns (seed 002's Ferrari 250 LM lap)",
     "mdf4": "an ASAM MDF4 file (.mf4), channels mapped by --map MAP.toml (optional raw CAN "
     "frames decoded with a DBC)",
     "rosbag": "a ROS 1 .bag or ROS 2 bag folder (rosbags): sensor_msgs/Imu, NavSatFix, "
@@ -55,6 +56,10 @@ def convert(fmt: str, src: Path, vehicle: Vehicle | None, map_path: Path | None)
                                  "--vehicle NAME_OR_TOML (steering ratio needed)")
             vehicle = load_vehicle(name)
         return convert_comma2k19(src, vehicle)
+    if fmt == "revs":
+        from sideslip.io.revs import convert_revs
+
+        return convert_revs(src)
     if map_path is None:
         raise InputError(str(src), f"format {fmt!r} needs a channel map: expected --map MAP.toml "
                          f"(start from: sideslip convert --template {fmt})")

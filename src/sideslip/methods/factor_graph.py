@@ -40,17 +40,16 @@ for row k, the exact posterior mean and 1-sigma of x_k given all data up to row 
 with window = 0 it is the Kalman filter, with window >= N - 1 the batch smoother (both
 tested).  On-line this is an output delay of window x dt (50 ms at 100 Hz).  The drive is
 streamed in chunks of ``LAG_CHUNK`` rows, so the working memory does not grow with the drive.
-Because the paper's 34 % gain of its FG over its KF came with different tunings of the two
-(its Section 4 says so), while here both use the same settings, fg_lag improves on kf_linear
-only by what 5 samples of smoothing give (about 1 % in beta, 4x in r on race_lap).
+Both use the same settings here (the paper tuned its KF and FG differently, its Section 4).
 
-Noise settings (:class:`FactorGraphSettings`).  The paper's numeric sigmas were lost in the
-text extraction; it states only their ordering: a small yaw-rate sigma (precise gyro), a larger
-lateral-acceleration sigma (a linear model compared with the real acceleration), and small
-model sigmas.  The defaults follow that ordering with values from physics, not from our
-scenarios (see the dataclass).  The model sigmas are per step at ``reference_dt`` (0.01 s) and
-scale with sqrt(dt/reference_dt) so that the same settings describe the same continuous
-process noise at other sampling rates.
+Noise settings (:class:`FactorGraphSettings`): ``preset`` "auto" (default) identifies the a_y
+and beta-model sigmas from the drive (:mod:`sideslip.methods.fg_tuning`: least error of the
+gyro predicted 0.3 s ahead), "paper" is the authors' published set, "physics" fixed values
+argued in the dataclass; explicit values override.  Model sigmas are per ``reference_dt``
+step and scale with sqrt(dt/reference_dt).  Honest 1-sigma: block sums of the graph's Kalman
+innovations over 2 s windows inflate the variance where the model stops fitting (``health``),
+and a vehicle file's stiffness error, which no test on the drive can see, adds
+(``stiffness_rel_sigma`` x slip angle)^2 to beta's variance.
 
 Accelerometer.  The paper uses the lateral accelerometer raw; so do we.  It reads specific
 force: the tyre forces over m plus g sin(suspension roll).  The model's right side C x + D delta
@@ -78,15 +77,25 @@ them and the 1-sigma grows.
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
+from typing import Any, Literal
 
-import numba
 import numpy as np
 from numpy.typing import NDArray
 
 from sideslip.drive import Drive
 from sideslip.estimate import Estimate
 from sideslip.filters.banded import assemble_chain, fixed_lag_chain, selected_inverse, solve_chain
+from sideslip.methods.fg_tuning import (
+    BLOCK_S,
+    PRESETS,
+    SIGMA_FIELDS,
+    WINDOW_S,
+    Tuning,
+    block_consistency,
+    chain_kalman,
+    choose_sigmas,
+)
 from sideslip.methods.registry import SPEED, register
 from sideslip.models.single_track import continuous_arrays
 from sideslip.signals import hold, vehicle_speed
@@ -99,24 +108,37 @@ COLUMNS = ("wz", "ay", "steer", SPEED)
 VEHICLE_PARAMS = ("mass", "yaw_inertia", "lf", "lr", "cf", "cr")
 
 
+Preset = Literal["auto", "paper", "physics"]
+
+
 @dataclass(frozen=True)
 class FactorGraphSettings:
     """Sigmas (1-sigma of each factor's residual) and options of the seed-002 graph.
 
+    The four sigmas come from ``preset`` unless set explicitly (an explicit value overrides
+    the preset):
+
+    * ``"auto"`` (default): ``lateral_acceleration`` and ``model_beta`` identified from the
+      drive (:mod:`sideslip.methods.fg_tuning`: least error of the gyro predicted 0.3 s ahead),
+      ``yaw_rate`` and ``model_yaw_rate`` from ``"physics"``;
+    * ``"paper"``: the seed-002 authors' values (beta dynamic 4e-3, yaw-rate dynamic 0.9e-2,
+      yaw-rate observation 1e-2, lateral acceleration 7; their code's defaults);
+    * ``"physics"``: the fixed values argued below (this package's earlier default).
+
     Attributes
     ----------
-    prior_beta : rad.  Prior on beta_0 = 0: drives start near straight running; 3 deg.
-    prior_yaw_rate : rad/s.  Prior on r_0 = 0; the first gyro sample overrides it.
+    preset : "auto", "paper" or "physics" (above).
     yaw_rate : rad/s.  Yaw-rate factor r_k = wz_k: MEMS gyro white noise (~0.005 rad/s at
-        100 Hz) plus an uncompensated bias of the same order; the paper's "small" sigma.
+        100 Hz) plus an uncompensated bias of the same order; physics 0.01.
     lateral_acceleration : m/s^2.  a_y factor: accelerometer noise (~0.05 m/s^2) is small
         against the linear-tyre model error near the grip limit (~0.5 m/s^2 at 0.6 g with
-        tyres 10 % past linear) and the suspension-roll term (~5 % of a_y); the paper's
-        "larger" sigma.
+        tyres 10 % past linear) and the suspension-roll term (~5 % of a_y); physics 0.5.
     model_beta : rad per ``reference_dt`` step.  beta dynamic factor: an error of 1 m/s^2 in
         the modelled tyre force per mass at 10 m/s is 0.1 rad/s of beta rate, 0.001 rad/step.
     model_yaw_rate : rad/s per ``reference_dt`` step.  r dynamic factor: a yaw-moment error of
         ~1000 N m on Iz ~ 1000 kg m^2 is 1 rad/s^2, 0.01 rad/s per step.
+    prior_beta : rad.  Prior on beta_0 = 0: drives start near straight running; 3 deg.
+    prior_yaw_rate : rad/s.  Prior on r_0 = 0; the first gyro sample overrides it.
     reference_dt : s.  Step at which the model sigmas are quoted (sigma ~ sqrt(dt)).
     speed_gate : m/s.  Below it (and reversing) the low-speed handling of the module docstring.
     low_speed_beta : rad.  Sigma of the low-speed kinematic pseudo-measurement on beta.
@@ -124,34 +146,77 @@ class FactorGraphSettings:
     window : samples.  fg_lag's window: the dynamic steps after the prior block (paper: 5).
     max_step : s.  A time step longer than this (a gap in the recording) carries no model
         information: the dynamic factor across it becomes a fresh prior (restart).
+    consistency : inflate the 1-sigma where the windowed NIS of the factors' residuals exceeds
+        its chi^2 bound (:mod:`sideslip.filters.consistency`), and report ``health``.
+    stiffness_rel_sigma : 1-sigma relative error of the vehicle file's cornering stiffness,
+        added to beta's variance as (stiffness_rel_sigma x the larger axle slip angle)^2.  A stiffness
+        scaled by s moves the slip angle inferred from a force by (1 - 1/s) of itself, the same
+        for the whole graph, so neither the innovations nor any other test on the drive can see
+        it (measured: a file 30 % low leaves the windowed NIS inside its bound).  Users' files
+        are 20-35 % off (nominal tyre data against the effective axle stiffness): 0.3 makes a
+        file 30 % off a 1-sigma error.  0 trusts the file.
     """
 
+    preset: Preset = "auto"
+    yaw_rate: float | None = None
+    lateral_acceleration: float | None = None
+    model_beta: float | None = None
+    model_yaw_rate: float | None = None
     prior_beta: float = 0.05
     prior_yaw_rate: float = 0.05
-    yaw_rate: float = 0.01
-    lateral_acceleration: float = 0.5
-    model_beta: float = 0.001
-    model_yaw_rate: float = 0.01
     reference_dt: float = 0.01
     speed_gate: float = 3.0
     low_speed_beta: float = 0.02
     low_speed_inflation: float = 10.0
     window: int = 5
     max_step: float = 0.25
+    consistency: bool = True
+    stiffness_rel_sigma: float = 0.3
 
     def __post_init__(self) -> None:
+        if self.preset not in ("auto", *PRESETS):
+            raise ValueError(
+                f"FactorGraphSettings.preset = {self.preset!r}: expected 'auto', "
+                + ", ".join(repr(p) for p in PRESETS)
+            )
         for name in (
-            "prior_beta", "prior_yaw_rate", "yaw_rate", "lateral_acceleration", "model_beta",
-            "model_yaw_rate", "reference_dt", "speed_gate", "low_speed_beta",
-            "low_speed_inflation", "max_step",
+            *SIGMA_FIELDS, "prior_beta", "prior_yaw_rate", "reference_dt", "speed_gate",
+            "low_speed_beta", "low_speed_inflation", "max_step",
         ):  # fmt: skip
             value = getattr(self, name)
-            if not (math.isfinite(value) and value > 0):
+            if value is None and name in SIGMA_FIELDS:
+                continue
+            if isinstance(value, bool) or not (
+                isinstance(value, int | float) and math.isfinite(value) and value > 0
+            ):
                 raise ValueError(f"FactorGraphSettings.{name} = {value!r}: expected a number > 0")
+        if not (math.isfinite(self.stiffness_rel_sigma) and 0 <= self.stiffness_rel_sigma < 1):
+            raise ValueError(
+                f"FactorGraphSettings.stiffness_rel_sigma = {self.stiffness_rel_sigma!r}: "
+                "expected a number in [0, 1)"
+            )
         if int(self.window) != self.window or self.window < 0:
             raise ValueError(
                 f"FactorGraphSettings.window = {self.window!r}: expected an integer >= 0"
             )
+
+    def fixed_sigmas(self) -> dict[str, float | None]:
+        """Each sigma as set or given by a named preset; None where "auto" identifies it."""
+        table = PRESETS.get(self.preset, {})
+        return {k: getattr(self, k) if getattr(self, k) is not None else table.get(k)
+                for k in SIGMA_FIELDS}  # fmt: skip
+
+    def with_sigmas(self, sigmas: dict[str, float]) -> FactorGraphSettings:
+        """These settings with all four sigmas given."""
+        changes: dict[str, Any] = {k: float(sigmas[k]) for k in SIGMA_FIELDS}
+        return replace(self, **changes)
+
+    def sigma(self, name: str) -> float:
+        """A sigma of resolved settings (:meth:`with_sigmas`); ValueError if still unset."""
+        value = getattr(self, name)
+        if value is None:
+            raise ValueError(f"FactorGraphSettings.{name} is not resolved (preset 'auto')")
+        return float(value)
 
 
 DEFAULT_SETTINGS = FactorGraphSettings()
@@ -259,8 +324,8 @@ def build_graph(
     g = dt[:, None] * B[:-1, :, 0] * delta[:-1, None]
     scale = np.sqrt(dt / settings.reference_dt)
     sigma_q = np.empty((n - 1, 2))
-    sigma_q[:, 0] = settings.model_beta * scale
-    sigma_q[:, 1] = settings.model_yaw_rate * scale
+    sigma_q[:, 0] = settings.sigma("model_beta") * scale
+    sigma_q[:, 1] = settings.sigma("model_yaw_rate") * scale
     sigma_q[low[:-1]] *= settings.low_speed_inflation
     # a time gap restarts the chain: no dynamics across it, the prior's sigmas instead
     gap = inputs.time_gap[start : start + n - 1]
@@ -277,12 +342,12 @@ def build_graph(
     Hu[:, 0, 1] = 1.0
     ok = np.isfinite(wz)
     zu[ok, 0] = wz[ok]
-    sigma_u[ok, 0] = settings.yaw_rate
+    sigma_u[ok, 0] = settings.sigma("yaw_rate")
     # lateral acceleration (binary on beta_k, r_k), above the speed gate only
     Hu[:, 1, :] = C[:, 1, :]
     ok = np.isfinite(ay) & ~low
     zu[ok, 1] = ay[ok] - D[ok, 1, 0] * delta[ok]
-    sigma_u[ok, 1] = settings.lateral_acceleration
+    sigma_u[ok, 1] = settings.sigma("lateral_acceleration")
     # low-speed kinematic sideslip (unary on beta_k)
     Hu[:, 2, 0] = 1.0
     zu[low, 2] = np.arctan(vehicle.lr * np.tan(np.clip(delta[low], -1.2, 1.2)) / vehicle.wheelbase)
@@ -300,29 +365,80 @@ def build_graph(
     )
 
 
+@dataclass(frozen=True)
+class Prepared:
+    """A drive ready to solve: inputs, settings with every sigma resolved, how they were chosen,
+    and the graph when the tuning already built it."""
+
+    inputs: GraphInputs
+    settings: FactorGraphSettings
+    tuning: Tuning
+    graph: SideslipGraph | None
+
+
+def _reweighted(unit: SideslipGraph, s: FactorGraphSettings, gap: NDArray[np.bool_]) -> SideslipGraph:
+    """The graph built with unit sigmas (``unit``) rescaled to the sigmas of ``s``."""
+    sigma_q = unit.sigma_q.copy()
+    move = ~gap
+    sigma_q[move, 0] *= s.sigma("model_beta")
+    sigma_q[move, 1] *= s.sigma("model_yaw_rate")
+    sigma_u = unit.sigma_u.copy()
+    sigma_u[:, 0] *= s.sigma("yaw_rate")
+    sigma_u[:, 1] *= s.sigma("lateral_acceleration")
+    return replace(unit, sigma_q=sigma_q, sigma_u=sigma_u)
+
+
+def prepare(drive: Drive, vehicle: Vehicle, settings: FactorGraphSettings = DEFAULT_SETTINGS) -> Prepared:
+    """Inputs of ``drive`` and the sigmas of ``settings``: from the preset or set, or, for
+    "auto", identified from the drive (:func:`sideslip.methods.fg_tuning.choose_sigmas`)."""
+    inputs = graph_inputs(drive, vehicle, settings)
+    fixed = settings.fixed_sigmas()
+    if all(v is not None for v in fixed.values()):
+        label = "set" if settings.preset == "auto" else f"{settings.preset} preset"
+        source = {k: ("set" if getattr(settings, k) is not None else label) for k in fixed}
+        values = {k: float(v) for k, v in fixed.items() if v is not None}
+        return Prepared(inputs, settings.with_sigmas(values), Tuning(values, source, None, []), None)
+    unit_settings = settings.with_sigmas(dict.fromkeys(SIGMA_FIELDS, 1.0))
+    unit = build_graph(inputs, vehicle, unit_settings)
+    dt = float(np.median(np.diff(inputs.t))) if inputs.t.size > 1 else settings.reference_dt
+    tuning = choose_sigmas(
+        fixed, unit.F, unit.g, unit.wq, unit.Hu, unit.zu, unit.wu, unit.x0,
+        np.diag(unit.sigma0**2), dt, ~inputs.low_speed, inputs.time_gap,
+    )  # fmt: skip
+    resolved = settings.with_sigmas(tuning.sigmas)
+    return Prepared(inputs, resolved, tuning, _reweighted(unit, resolved, inputs.time_gap))
+
+
 def sideslip_graph(
     drive: Drive, vehicle: Vehicle, settings: FactorGraphSettings = DEFAULT_SETTINGS
 ) -> SideslipGraph:
     """The whole seed-002 graph of ``drive`` (used by fg_batch, kf_linear and the peers)."""
-    return build_graph(graph_inputs(drive, vehicle, settings), vehicle, settings)
+    return _graph(prepare(drive, vehicle, settings), vehicle)
 
 
-def solve_batch(graph: SideslipGraph) -> tuple[FloatArray, FloatArray]:
-    """Batch solution: ``(x, var)`` of shape (N, 2), one banded Cholesky + selected inverse."""
+def _graph(prep: Prepared, vehicle: Vehicle) -> SideslipGraph:
+    return prep.graph if prep.graph is not None else build_graph(prep.inputs, vehicle, prep.settings)
+
+
+def solve_batch(graph: SideslipGraph) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Batch solution: ``(x, var, cov)``: (N, 2) means and marginal variances and the (N,)
+    beta-r covariance of each row; one banded Cholesky + selected inverse."""
     lam0, eta0 = graph.prior_information
     ab, rhs = assemble_chain(graph.F, graph.g, graph.wq, graph.Hu, graph.zu, graph.wu, lam0, eta0)
     x, cb = solve_chain(ab, rhs)
     sb = selected_inverse(cb)
-    return x.reshape(-1, 2), sb[0].reshape(-1, 2)
+    return x.reshape(-1, 2), sb[0].reshape(-1, 2), sb[1].reshape(-1, 2)[:, 0].copy()
 
 
 def solve_lag(
     inputs: GraphInputs,
     vehicle: Vehicle,
-    settings: FactorGraphSettings = DEFAULT_SETTINGS,
+    settings: FactorGraphSettings,
     chunk: int = LAG_CHUNK,
-) -> tuple[FloatArray, FloatArray]:
-    """Fixed-lag solution: state k from the data up to k + window, streamed in chunks.
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Fixed-lag solution: state k from the data up to k + window, streamed in chunks;
+    ``(x, var, cov)`` as :func:`solve_batch`.  ``settings`` must have its sigmas resolved
+    (:func:`prepare`).
 
     Each chunk of ``chunk`` rows builds only its own factors plus ``window`` rows of look-ahead
     and hands the marginalised prior to the next chunk, so the working memory is O(chunk +
@@ -332,111 +448,27 @@ def solve_lag(
     lag = int(settings.window)
     x = np.zeros((n, 2))
     var = np.zeros((n, 2))
+    cov = np.zeros(n)
     lam = np.diag(1.0 / np.array([settings.prior_beta, settings.prior_yaw_rate]) ** 2)
     eta = np.zeros(2)  # prior mean 0
     for a in range(0, n, chunk):
         b = min(a + chunk, n)
         graph = build_graph(inputs, vehicle, settings, a, min(b + max(lag, 1), n))
-        xs, vs, ok, lam, eta = fixed_lag_chain(
+        xs, vs, cs, ok, lam, eta = fixed_lag_chain(
             graph.F, graph.g, graph.wq, graph.Hu, graph.zu, graph.wu, lam, eta, lag, b - a
         )
         if not ok:
             raise np.linalg.LinAlgError("fixed-lag window not positive definite")
         x[a:b] = xs
         var[a:b] = vs
-    return x, var
+        cov[a:b] = cs[:, 0]
+    return x, var, cov
 
 
-@numba.njit(cache=True)
-def _kalman(
-    F: FloatArray,
-    g: FloatArray,
-    wq: FloatArray,
-    Hu: FloatArray,
-    zu: FloatArray,
-    wu: FloatArray,
-    x0: FloatArray,
-    P0: FloatArray,
-) -> tuple[FloatArray, FloatArray]:
-    """Linear KF: scalar Joseph-form updates with each present unary factor, then predict.
-
-    Written out with preallocated buffers so the loop allocates nothing.
-    """
-    n = Hu.shape[0]
-    M = Hu.shape[1]
-    nx = Hu.shape[2]
-    x = x0.copy()
-    P = P0.copy()
-    xs = np.zeros((n, nx))
-    vs = np.zeros((n, nx))
-    Ph = np.zeros(nx)
-    xn = np.zeros(nx)
-    FP = np.zeros((nx, nx))
-    K = np.zeros(nx)
-    IKH = np.zeros((nx, nx))
-    for k in range(n):
-        for m in range(M):
-            w = wu[k, m]
-            if w == 0.0:
-                continue
-            s = 1.0 / w
-            innov = zu[k, m]
-            for i in range(nx):
-                acc = 0.0
-                for j in range(nx):
-                    acc += P[i, j] * Hu[k, m, j]
-                Ph[i] = acc
-                s += Hu[k, m, i] * acc
-                innov -= Hu[k, m, i] * x[i]
-            for i in range(nx):
-                K[i] = Ph[i] / s
-                x[i] += K[i] * innov
-            # Joseph form: P = (I - K h') P (I - K h')' + K K' / w
-            for i in range(nx):
-                for j in range(nx):
-                    IKH[i, j] = (1.0 if i == j else 0.0) - K[i] * Hu[k, m, j]
-            for i in range(nx):
-                for j in range(nx):
-                    acc = 0.0
-                    for c in range(nx):
-                        acc += IKH[i, c] * P[c, j]
-                    FP[i, j] = acc
-            for i in range(nx):
-                for j in range(i + 1):
-                    acc = K[i] * K[j] / w
-                    for c in range(nx):
-                        acc += FP[i, c] * IKH[j, c]
-                    P[i, j] = acc
-                    P[j, i] = acc
-        for i in range(nx):
-            xs[k, i] = x[i]
-            vs[k, i] = P[i, i]
-        if k < n - 1:
-            for i in range(nx):
-                acc = g[k, i]
-                for j in range(nx):
-                    acc += F[k, i, j] * x[j]
-                xn[i] = acc
-                for j in range(nx):
-                    acc = 0.0
-                    for c in range(nx):
-                        acc += F[k, i, c] * P[c, j]
-                    FP[i, j] = acc
-            for i in range(nx):
-                x[i] = xn[i]
-                for j in range(i + 1):
-                    acc = 0.0
-                    for c in range(nx):
-                        acc += FP[i, c] * F[k, j, c]
-                    P[i, j] = acc
-                    P[j, i] = acc
-                P[i, i] += 1.0 / wq[k, i]
-    return xs, vs
-
-
-def solve_kalman(graph: SideslipGraph) -> tuple[FloatArray, FloatArray]:
-    """Kalman filter on the same factors: F, g, Q = diag(sigma_q^2), R = sigma_u^2, P0."""
-    return _kalman(
+def solve_kalman(graph: SideslipGraph) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
+    """Kalman filter on the same factors: F, g, Q = diag(sigma_q^2), R = sigma_u^2, P0;
+    ``(x, var, cov, innovation, S)`` (:func:`sideslip.methods.fg_tuning.chain_kalman`)."""
+    return chain_kalman(
         graph.F, graph.g, graph.wq, graph.Hu, graph.zu, graph.wu, graph.x0,
         np.diag(graph.sigma0**2),
     )  # fmt: skip
@@ -445,25 +477,64 @@ def solve_kalman(graph: SideslipGraph) -> tuple[FloatArray, FloatArray]:
 def _estimate(
     name: str,
     drive: Drive,
-    low_speed: NDArray[np.bool_],
+    prep: Prepared,
+    innovations: tuple[FloatArray, FloatArray] | None,
     x: FloatArray,
     var: FloatArray,
+    cov: FloatArray,
     settings: FactorGraphSettings,
+    causal: bool,
     extra: dict[str, object],
+    vehicle: Vehicle,
 ) -> Estimate:
-    std = np.sqrt(np.maximum(var, 0.0))
+    """Series, params and the consistency-inflated 1-sigma of one of the three methods.
+
+    ``innovations``: the graph's Kalman-filter innovations and their variances (N, 3), tested
+    in blocks (:func:`sideslip.methods.fg_tuning.block_consistency`) over 2 s windows, trailing for the
+    on-line kf_linear and fg_lag, centred for fg_batch; None when ``settings.consistency`` is
+    off.  Where a window fails, the variances of beta and r are multiplied by its NIS ratio.
+    """
+    low_speed = prep.inputs.low_speed
     params: dict[str, object] = {
         "settings": asdict(settings),
+        "tuning": prep.tuning.params(),
         "accelerometer": "raw lateral specific force (no roll/bank compensation, as the paper)",
         "low_speed_fraction": float(low_speed.mean()) if low_speed.size else 0.0,
         **extra,
     }
-    return Estimate(
-        name,
-        drive.t,
-        {"beta": x[:, 0].copy(), "r": x[:, 1].copy(), "beta_std": std[:, 0], "r_std": std[:, 1]},
-        params,
-    )
+    var = np.maximum(var, 0.0)
+    out: dict[str, FloatArray] = {"beta": x[:, 0].copy(), "r": x[:, 1].copy()}
+    inn: dict[str, FloatArray] = {}
+    if innovations is not None:
+        nu, S = innovations
+        check = block_consistency(drive.t, nu[:, :2], S[:, :2], causal)
+        var = var * check.inflation[:, None]
+        out["health"] = check.health
+        params["health"] = {**check.summary(drive.t), "test": (
+            f"sums of the graph's Kalman innovations (gyro, a_y) over {BLOCK_S:g} s blocks, "
+            f"chi2 99 % over {WINDOW_S:g} s windows; variance x NIS ratio where it fails")}
+        inn = {"wz": nu[:, 0], "wz_s": S[:, 0], "ay": nu[:, 1], "ay_s": S[:, 1]}
+    if settings.stiffness_rel_sigma > 0:
+        # axle slip angles (module docstring) at the model speed; the larger one
+        v = prep.inputs.v_measurement
+        alpha_r = vehicle.lr * x[:, 1] / v - x[:, 0]
+        alpha_f = prep.inputs.delta - x[:, 0] - vehicle.lf * x[:, 1] / v
+        alpha = np.maximum(np.abs(alpha_f), np.abs(alpha_r))
+        var[:, 0] += (settings.stiffness_rel_sigma * alpha) ** 2
+        params["stiffness_rel_sigma"] = settings.stiffness_rel_sigma
+    std = np.sqrt(var)
+    out["beta_std"] = std[:, 0]
+    out["r_std"] = std[:, 1]
+    return Estimate(name, drive.t, out, params, inn)
+
+
+def _filter_innovations(
+    graph: SideslipGraph, settings: FactorGraphSettings
+) -> tuple[FloatArray, FloatArray] | None:
+    if not settings.consistency:
+        return None
+    _, _, _, nu, S = solve_kalman(graph)
+    return nu, S
 
 
 @register(
@@ -478,9 +549,11 @@ def fg_batch(
     drive: Drive, vehicle: Vehicle, settings: FactorGraphSettings = DEFAULT_SETTINGS
 ) -> Estimate:
     """Batch factor-graph smoother of the whole drive (module docstring), O(N)."""
-    graph = sideslip_graph(drive, vehicle, settings)
-    x, var = solve_batch(graph)
-    return _estimate("fg_batch", drive, graph.low_speed, x, var, settings, {"solver": "banded Cholesky"})
+    prep = prepare(drive, vehicle, settings)
+    graph = _graph(prep, vehicle)
+    x, var, cov = solve_batch(graph)
+    return _estimate("fg_batch", drive, prep, _filter_innovations(graph, settings), x, var, cov,
+                     settings, False, {"solver": "banded Cholesky"}, vehicle)  # fmt: skip
 
 
 @register(
@@ -495,12 +568,14 @@ def fg_lag(
     drive: Drive, vehicle: Vehicle, settings: FactorGraphSettings = DEFAULT_SETTINGS
 ) -> Estimate:
     """Fixed-lag factor-graph smoother: each row's state from the data up to ``window`` rows
-    later (an on-line delay of window x dt), oldest state marginalised into the next prior."""
-    inputs = graph_inputs(drive, vehicle, settings)
-    x, var = solve_lag(inputs, vehicle, settings)
+    later (an on-line delay of window x dt), oldest state marginalised into the next prior.
+    The "auto" sigmas are identified off-line from the whole drive (module fg_tuning)."""
+    prep = prepare(drive, vehicle, settings)
+    x, var, cov = solve_lag(prep.inputs, vehicle, prep.settings)
+    inn = _filter_innovations(_graph(prep, vehicle), settings) if settings.consistency else None
     return _estimate(
-        "fg_lag", drive, inputs.low_speed, x, var, settings,
-        {"window": int(settings.window), "output_delay_samples": int(settings.window)},
+        "fg_lag", drive, prep, inn, x, var, cov, settings, True,
+        {"window": int(settings.window), "output_delay_samples": int(settings.window)}, vehicle,
     )  # fmt: skip
 
 
@@ -516,6 +591,8 @@ def kf_linear(
     drive: Drive, vehicle: Vehicle, settings: FactorGraphSettings = DEFAULT_SETTINGS
 ) -> Estimate:
     """Linear Kalman filter with F = I + dt A, Q = diag(model sigmas^2), R = factor sigmas^2."""
-    graph = sideslip_graph(drive, vehicle, settings)
-    x, var = solve_kalman(graph)
-    return _estimate("kf_linear", drive, graph.low_speed, x, var, settings, {"filter": "Joseph form"})
+    prep = prepare(drive, vehicle, settings)
+    x, var, cov, nu, S = solve_kalman(_graph(prep, vehicle))
+    inn = (nu, S) if settings.consistency else None
+    return _estimate("kf_linear", drive, prep, inn, x, var, cov, settings, True,
+                     {"filter": "Joseph form"}, vehicle)  # fmt: skip

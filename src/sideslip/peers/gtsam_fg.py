@@ -1,6 +1,7 @@
 """Peer: the seed-002 factor graph built with GTSAM's linear factors, for cross-checks/speed.
 
-The graph is the one of :func:`sideslip.methods.factor_graph.sideslip_graph`, laid out as in
+The graph is the one of :func:`sideslip.methods.factor_graph.sideslip_graph` (with the sigmas
+fg_batch resolves: a named preset, explicit values, or "auto" from the drive), laid out as in
 the paper's Fig. 2/3: one scalar variable per beta_k (key 2k) and per r_k (key 2k+1);
 two ternary dynamic factors per step (beta_{k+1}, beta_k, r_k) and (r_{k+1}, beta_k, r_k),
 a unary yaw-rate factor on r_k, a binary lateral-acceleration factor on (beta_k, r_k), the
