@@ -89,6 +89,9 @@ STIFFNESS_PRIOR_REL = 0.5  # prior 1-sigma of 1/cf, 1/cr relative to the file's
 GN_ITERATIONS = 8
 SCALE_FROM_GNSS_MAX = 0.012  # curvature-scale sigma below this: gyro / wheel scales came from GNSS
 OUTLIER_SIGMAS = 5.0
+# lateral accelerometer offset (bias ~0.05 m/s^2 plus roll misalignment 0.1 deg x g): it moves
+# delta_0 by K_us times itself, which the drive cannot tell from a steering-sensor offset
+AY_OFFSET_SIGMA = 0.06
 MIN_ROWS = 50
 
 
@@ -140,6 +143,7 @@ def _steer_rows(sig: Signals, vehicle: Vehicle, cal: SensorCal) -> dict[str, Flo
         "ff": (vehicle.mass * vehicle.lr * fy + iz * rdot) / L,
         "fr": (vehicle.mass * vehicle.lf * fy - iz * rdot) / L,
         "v": v,
+        "a": np.abs(fy),
         "step": np.full(1, float(step)),
     }
 
@@ -173,7 +177,10 @@ def _rear_rows(sig: Signals, vehicle: Vehicle, cal: SensorCal) -> dict[str, Floa
     fr = (vehicle.mass * vehicle.lf * fy[sel] - iz * rdot[sel]) / L
     # a gyro scale error e = s_g,true / s_g - 1 adds e (psi - psi_0) to beta: a regressor
     P = project_windows(win[sel], tg[sel], np.column_stack([y, fr, psi[sel]]))
-    return {"t": tg[sel], "y": P[:, 0], "fr": P[:, 1], "psi": P[:, 2], "win": win[sel], "v": v[sel]}
+    return {
+        "t": tg[sel], "y": P[:, 0], "fr": P[:, 1], "psi": P[:, 2], "win": win[sel], "v": v[sel],
+        "a": np.abs(fy[sel]),
+    }  # fmt: skip
 
 
 def _residuals(
@@ -247,10 +254,12 @@ def _subset(rows: dict[str, FloatArray], mask: NDArray[np.bool_]) -> dict[str, F
     return {key: (val[mask] if val.size == mask.size else val) for key, val in rows.items()}
 
 
-def _split(rows: dict[str, FloatArray] | None, v_split: float, low: bool) -> dict[str, FloatArray] | None:
+def _split(
+    rows: dict[str, FloatArray] | None, key: str, split: float, low: bool
+) -> dict[str, FloatArray] | None:
     if rows is None:
         return None
-    mask = rows["v"] < v_split if low else rows["v"] >= v_split
+    mask = rows[key] < split if low else rows[key] >= split
     return _subset(rows, mask) if mask.sum() >= MIN_ROWS else None
 
 
@@ -258,7 +267,8 @@ def fit_axles(sig: Signals, vehicle: Vehicle, cal: SensorCal) -> list[Fitted]:
     """Identify steer scale/offset, cf, cr, K_us, K (see the module docstring).
 
     The 1-sigma adds the *operating-point spread*: the same fit on the rows below and above
-    the median speed; where the two differ by more than their noise, half the excess
+    the median speed, and below and above the median |f_y|; where two halves differ by more
+    than their noise, half the excess (the larger of the two splits)
     (``var_sys = ((a' d)^2 - a' (C_lo + C_hi) a) / 4`` for a quantity ``a' theta``) is added, as
     the effective stiffness of real tyres depends on where it is measured.
     """
@@ -276,16 +286,20 @@ def fit_axles(sig: Signals, vehicle: Vehicle, cal: SensorCal) -> list[Fitted]:
     if s is None and g is None:
         return _nothing(vehicle, "too few rows in the linear range (steer, speed, yaw rate)")
     theta, cov, clusters, s, g = _gauss_newton(s, g, prior_mean, prior_sd, robust=True)
-    speeds = np.concatenate([x["v"] for x in (s, g) if x is not None])
-    v_split = float(np.median(speeds))
-    lo = _gauss_newton(_split(s, v_split, True), _split(g, v_split, True), prior_mean, prior_sd, False)
-    hi = _gauss_newton(_split(s, v_split, False), _split(g, v_split, False), prior_mean, prior_sd, False)
+    halves = []
+    for key in ("v", "a"):  # speed, then lateral acceleration
+        split = float(np.median(np.concatenate([x[key] for x in (s, g) if x is not None])))
+        lo = _gauss_newton(_split(s, key, split, True), _split(g, key, split, True), prior_mean, prior_sd, False)
+        hi = _gauss_newton(_split(s, key, split, False), _split(g, key, split, False), prior_mean, prior_sd, False)
+        if lo[2] >= 4 and hi[2] >= 4:
+            halves.append((lo, hi))
 
     def sys_var(a: FloatArray) -> float:
-        if lo[2] < 4 or hi[2] < 4:
-            return 0.0
-        d = float(a @ (lo[0] - hi[0]))
-        return max(0.0, d * d - float(a @ (lo[1] + hi[1]) @ a)) / 4.0
+        out = 0.0
+        for lo, hi in halves:
+            d = float(a @ (lo[0] - hi[0]))
+            out = max(out, max(0.0, d * d - float(a @ (lo[1] + hi[1]) @ a)) / 4.0)
+        return out
 
     n_s = int(s["y"].size * s["step"][0]) if s is not None else 0
     n_g = int(g["y"].size) if g is not None else 0
@@ -331,8 +345,10 @@ def _results(
         out.append(Fitted("steer_scale", float(theta[0]), sd_scale, n_s, src_s, True, "-", 1.0, None, note_s))
     else:
         out.append(left_alone("steer_scale", 1.0, "-", "no steering rows at varied speeds"))
-    if n_s and enough and informed(float(sd[1]), STEER_OFFSET_PRIOR):
-        out.append(Fitted("steer_offset_rad", float(theta[1]), float(sd[1]), n_s, src_s, True, "rad", 0.0,
+    kus_now = float(np.array([0.0, 0.0, m * lr / L, -m * lf / L, 0.0]) @ theta)
+    sd_d0 = math.hypot(float(sd[1]), kus_now * AY_OFFSET_SIGMA)
+    if n_s and enough and informed(sd_d0, STEER_OFFSET_PRIOR):
+        out.append(Fitted("steer_offset_rad", float(theta[1]), sd_d0, n_s, src_s, True, "rad", 0.0,
                           None, "includes K_us times the accelerometer's lateral bias"))
     else:
         out.append(left_alone("steer_offset_rad", 0.0, "rad", "no steering rows"))

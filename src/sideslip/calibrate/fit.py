@@ -50,8 +50,15 @@ class LinearFit:
         return np.sqrt(np.maximum(np.diag(self.cov), 0.0))
 
 
-def clusters_of(t: FloatArray, block_s: float = BLOCK_S, segment: IntArray | None = None) -> IntArray:
-    """Cluster id per row: blocks of ``block_s`` seconds, split where ``segment`` changes."""
+def clusters_of(t: FloatArray, block_s: float | None = None, segment: IntArray | None = None) -> IntArray:
+    """Cluster id per row: blocks of ``block_s`` seconds, split where ``segment`` changes.
+
+    Default block: ``BLOCK_S``, shortened to a twelfth of the rows' time span (at least 1 s)
+    so that a short manoeuvre still has enough blocks for a covariance.
+    """
+    if block_s is None:
+        span = float(t[-1] - t[0]) if t.size > 1 else 0.0
+        block_s = min(BLOCK_S, max(1.0, span / 12.0))
     block = np.floor((t - (t[0] if t.size else 0.0)) / block_s).astype(np.intp)
     if segment is None:
         return block

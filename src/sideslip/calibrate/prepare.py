@@ -81,7 +81,8 @@ class Signals:
     GNSS grid (length m): ``g_rows`` their drive rows; ``g_course`` (rad, unwrapped per run,
     at the CG), ``g_speed`` (3-D, m/s), ``g_course_rate`` (rad/s), ``g_ax``/``g_ay``
     (kinematic, m/s^2), ``g_dt`` the receiver interval (s); ``g_valid`` rows where the rates
-    are defined; ``g_run`` the run of consecutive epochs each belongs to.
+    are defined; ``g_run`` the run of consecutive epochs each belongs to; ``g_grade`` the road grade (rad,
+from the vertical Doppler; 0 without ``gnss_vu``).
     """
 
     t: FloatArray
@@ -105,6 +106,7 @@ class Signals:
     g_dt: float
     g_valid: BoolArray
     g_run: IntArray
+    g_grade: FloatArray
 
     @property
     def has_gnss(self) -> bool:
@@ -116,7 +118,7 @@ def _gnss(drive: Drive, wz: FloatArray, wx: FloatArray | None, lever: tuple[floa
     empty = np.zeros(0)
     none = (
         np.zeros(0, dtype=np.intp), empty, empty, empty, empty, empty, math.nan, np.zeros(0, bool),
-        np.zeros(0, dtype=np.intp),
+        np.zeros(0, dtype=np.intp), empty,
     )
     if not ("gnss_ve" in drive and "gnss_vn" in drive):
         return none
@@ -156,8 +158,12 @@ def _gnss(drive: Drive, wz: FloatArray, wx: FloatArray | None, lever: tuple[floa
         rate = moving_mean(tg, rate, SMOOTH_S)
         acc = moving_mean(tg, acc, SMOOTH_S)
     ay = speed * rate
+    # road grade from the vertical Doppler: sin(grade) = v_u / |v|
+    grade = np.arcsin(np.clip(vu[rows] / speed, -0.5, 0.5))
+    if dt_g < SMOOTH_S:
+        grade = moving_mean(tg, grade, SMOOTH_S)
     valid = np.isfinite(rate) & np.isfinite(acc)
-    return rows, out, speed, rate, acc, ay, dt_g, valid, run
+    return rows, out, speed, rate, acc, ay, dt_g, valid, run, np.nan_to_num(grade)
 
 
 def prepare(drive: Drive, gnss_lever: tuple[float, float, float]) -> Signals:
@@ -199,6 +205,7 @@ def prepare(drive: Drive, gnss_lever: tuple[float, float, float]) -> Signals:
         g_dt=g[6],
         g_valid=g[7],
         g_run=g[8],
+        g_grade=g[9],
     )
 
 

@@ -2,7 +2,8 @@
 
 Accelerometer model (``sideslip.simulate.sensors``; ISO axes, roll right-side-down positive):
 a body rolled by ``phi = bank + phi_s`` reads ``a_y,m = a_y + g sin(phi) - psi_m a_x + b_y`` and
-``a_x,m = a_x - g sin(theta) + psi_m a_y + b_x`` with ``psi_m`` the yaw misalignment, and
+``a_x,m = a_x - g sin(theta) + psi_m a_y + b_x`` (``theta = -grade + pitch_s``, the grade from
+the vertical Doppler) with ``psi_m`` the yaw misalignment, and
 ``a_z,m = g cos(phi) - a_y sin(phi) - phi_m a_y + b_z`` with ``phi_m`` the roll misalignment;
 the gyro reads ``w_y,m = theta' + r sin(phi) + phi_m r + b_wy``.
 
@@ -41,10 +42,13 @@ from sideslip.calibrate.fit import (
 from sideslip.calibrate.prepare import (
     AY_LINEAR_MAX,
     JERK_MAX,
+    RATE_S,
+    SMOOTH_S,
     STEER_GRID_S,
     V_GNSS_MIN,
     Signals,
     derivative,
+    moving_mean,
 )
 from sideslip.calibrate.result import Fitted, left_alone
 from sideslip.vehicle import G, Vehicle
@@ -56,6 +60,7 @@ ROLL_PRIOR_REL = 0.5  # prior 1-sigma of the file's roll gradient, fraction
 ROLL_SIGMA_ABS = 0.002  # rad/(m/s^2): without a file value, "informed" means sigma below this
 MISALIGN_PRIOR = math.radians(2.0)  # prior 1-sigma of a mounting misalignment, rad
 MIN_CLUSTERS = 4
+GNSS_DT_MAX = 0.5  # s: the roll relation needs GNSS at 2 Hz or faster (quasi-steady a_y over 2 epochs)
 # The roll misalignment and the road's bank in turns enter every relation together (the sensor
 # sees bank + suspension roll + misalignment).  Road crossfall is 1-3 deg (drainage), so the
 # misalignment's 1-sigma includes 2 deg of unknown mean bank: it is "informed" only when a
@@ -83,8 +88,11 @@ def roll_from_gnss(
     """Roll gradient (Fitted) and the yaw misalignment (value, sigma, rows) from GNSS rows."""
     name, unit = "roll_gradient_rad_per_m_s2", "rad/(m/s^2)"
     before = file_roll_gradient(vehicle)
-    if not sig.has_gnss or sig.ay is None:
-        why = "no GNSS Doppler" if not sig.has_gnss else "no ay column"
+    if not sig.has_gnss or sig.ay is None or sig.g_dt > GNSS_DT_MAX:
+        why = (
+            "no GNSS Doppler" if not sig.has_gnss else "no ay column" if sig.ay is None
+            else f"GNSS every {sig.g_dt:.1f} s is too slow to follow turn entries"
+        )  # fmt: skip
         return left_alone(name, before, unit, f"{why}: the roll gradient is not observable"), None
     rows = sig.g_rows
     tg = sig.t[rows]
@@ -102,7 +110,11 @@ def roll_from_gnss(
     if sel.sum() < 50:
         return left_alone(name, before, unit, "too few GNSS rows in the linear range"), None
     tw, w = tg[sel], win[sel]
-    ya = sig.ay[rows][sel] - ay_kin[sel]
+    # the kinematic a_y is a centred difference over `span`: the same box on the accelerometer
+    span = max(RATE_S, 2.0 * sig.g_dt)
+    ay_m = moving_mean(sig.t, sig.ay, span)[rows] if sig.g_dt > SMOOTH_S else sig.ay[rows]
+    ax_m = (moving_mean(sig.t, sig.ax, span)[rows] if sig.g_dt > SMOOTH_S else sig.ax[rows]) if sig.ax is not None else None
+    ya = ay_m[sel] - ay_kin[sel]
     Xa = np.column_stack([ay_kin[sel], ax_kin[sel]])
     P = project_windows(w, tw, np.column_stack([ya, Xa]))
     cl = clusters_of(tw, segment=w)
@@ -138,10 +150,13 @@ def roll_from_gnss(
     )
     psi_a = (-float(fit.theta[1]), float(sd[1]))
     # a_x relation: a_x,m - a_x,kin = psi_m a_y + c a_x + offset
-    if sig.ax is not None:
-        okx = np.isfinite(sig.ax[rows][sel])
-        yx = np.where(okx, sig.ax[rows][sel] - ax_kin[sel], 0.0)
-        # a_y^2: the body a_x differs from d|v|/dt by -a_y beta, beta ~ a_y
+    if ax_m is not None:
+        okx = np.isfinite(ax_m[sel])
+        # body a_x = d|v|/dt cos(beta) - a_y sin(beta), beta = lr kappa - K f_y: the kinematic
+        # part lr a_y^2 / v^2 is removed, the tyre part (K a_y^2) is the a_y^2 regressor
+        kin_beta = vehicle.lr * ay_kin[sel] / sig.g_speed[sel] ** 2
+        yx = ax_m[sel] - ax_kin[sel] - G * np.sin(sig.g_grade[sel]) + ay_kin[sel] * kin_beta
+        yx = np.where(okx, yx, 0.0)
         Xx = np.column_stack([Xa, ay_kin[sel] ** 2])
         Px = project_windows(w, tw, np.column_stack([yx, Xx]))
         fx, _ = fit_robust(

@@ -10,7 +10,8 @@ be told from a radius error and is added to the 1-sigma as ``SLIP_SIGMA``.
 Gyro (``w_z = s_g r + b_g``): over non-overlapping windows of ``GYRO_WINDOW_S`` between GNSS
 epochs of one run, the integrated gyro against the course change,
 ``int w_z dt = s_g (nu_1 - nu_0) + b_g T`` (the sideslip change over a window, which averages
-out over a turn's entry and exit, is the residual), and at standstill (wheels and GNSS at rest)
+out over a turn's entry and exit, is the residual; the spread between the drive's two halves
+beyond their noise is added to the 1-sigma), and at standstill (wheels and GNSS at rest)
 ``int w_z dt = b_g T`` over 1 s pieces (seed 001's zero-rate update).  Without GNSS only the
 bias is told, from standstill; the scale is left at 1 and said so.  ``b_g`` is the drive's
 average bias (the bias walks; the robust 1-sigma covers the walk between stops).
@@ -36,6 +37,8 @@ GYRO_WINDOW_S = 2.0  # s: window of the gyro-vs-course relation
 GYRO_SCALE_PRIOR = 0.05  # prior 1-sigma of the gyro scale (MEMS: 0.2-2 %), fraction
 GYRO_BIAS_PRIOR = 0.02  # rad/s: prior 1-sigma of the gyro bias (~1 deg/s)
 MIN_ROWS = 20
+MIN_WINDOWS = 20  # GNSS windows (40 s of driving): fewer cannot average the sideslip changes out
+MIN_STILL_S = 5.0  # s of standstill that tell the bias alone
 
 
 def wheel_speed_scale(sig: Signals) -> Fitted:
@@ -117,6 +120,15 @@ def gyro_bias_scale(sig: Signals) -> tuple[Fitted, Fitted]:
     prior_sd = np.array([GYRO_SCALE_PRIOR, GYRO_BIAS_PRIOR])
     fit, keep = fit_robust(X, y, clusters_of(tt), prior_mean, prior_sd)
     sd = fit.sigma()
+    # the two halves of the drive apart: a spread beyond their noise (sideslip changes that
+    # do not average out, bias walk) is added to the 1-sigma
+    half = tt < np.median(tt)
+    if half.sum() > 10 and (~half).sum() > 10:
+        f1, _ = fit_robust(X[half], y[half], clusters_of(tt[half]), prior_mean, prior_sd)
+        f2, _ = fit_robust(X[~half], y[~half], clusters_of(tt[~half]), prior_mean, prior_sd)
+        d = f1.theta - f2.theta
+        noise = np.diag(f1.cov) + np.diag(f2.cov)
+        sd = np.sqrt(sd**2 + np.maximum(0.0, d * d - noise) / 4.0)
     src_bits = []
     if n_gnss:
         src_bits.append(f"course change over {GYRO_WINDOW_S:g} s windows")
@@ -128,17 +140,21 @@ def gyro_bias_scale(sig: Signals) -> tuple[Fitted, Fitted]:
     epochs_per_window = max(1, round(GYRO_WINDOW_S / sig.g_dt)) if n_gnss else 0
     rows_gnss = int(kept[:n_gnss].sum()) * epochs_per_window
     rows_still = n_still if kept[n_gnss:].any() else 0
-    bias_ok = informed(float(sd[1]), GYRO_BIAS_PRIOR, 0.25) and fit.clusters >= 4
-    scale_ok = n_gnss > 0 and informed(float(sd[0]), GYRO_SCALE_PRIOR) and fit.clusters >= 4
+    enough_windows = int(kept[:n_gnss].sum()) >= MIN_WINDOWS
+    enough_still = n_still * float(np.median(np.diff(sig.t))) >= MIN_STILL_S if n_still else False
+    bias_ok = informed(float(sd[1]), GYRO_BIAS_PRIOR, 0.25) and fit.clusters >= 4 and (
+        enough_windows or enough_still
+    )
+    scale_ok = n_gnss > 0 and informed(float(sd[0]), GYRO_SCALE_PRIOR) and fit.clusters >= 4 and enough_windows
     bias = (
         Fitted(bias_name, float(fit.theta[1]), float(sd[1]), rows_gnss + rows_still, src, True,
                "rad/s", 0.0)
         if bias_ok
-        else left_alone(bias_name, 0.0, "rad/s", "too little standstill or GNSS course")
+        else left_alone(bias_name, 0.0, "rad/s", "too little standstill (5 s) or GNSS course (40 s)")
     )
     scale = (
         Fitted(scale_name, float(fit.theta[0]), float(sd[0]), rows_gnss, src, True, "-", 1.0)
         if scale_ok
-        else left_alone(scale_name, 1.0, "-", "no GNSS course in turns: the gyro scale is not observable")
+        else left_alone(scale_name, 1.0, "-", "too little GNSS course in turns (40 s): not observable")
     )
     return bias, scale
