@@ -96,8 +96,10 @@ def run(seed: int, scenarios: tuple[str, ...]) -> str:
         cf_err = (cal.get("cf").value / truth["cf"] - 1) * 100 if "cf" in truth else math.nan
         cr_err = (cal.get("cr").value / truth["cr"] - 1) * 100 if "cr" in truth else math.nan
         sr_err = (cal.get("steering_ratio").value / truth["steering_ratio"] - 1) * 100
-        mk.append(f"| {name} | {cf_err:+.1f} | {cr_err:+.1f} | {sr_err:+.2f} | {a:.3f} | {b:.3f} | {c:.3f} | "
-                  f"{(c / a - 1) * 100 if a > 0 else math.nan:+.0f} % | {len(drive) / 100 / 60:.1f} | {el:.2f} |")
+        mk.append(
+            f"| {name} | {cf_err:+.1f} | {cr_err:+.1f} | {sr_err:+.2f} | {a:.3f} | {b:.3f} | {c:.3f} | "
+            f"{(c / a - 1) * 100 if a > 0 else math.nan:+.0f} % | {len(drive) / 100 / 60:.1f} | {el:.2f} |"
+        )
         print(f"{name}: done", flush=True)
     head = " | ".join(f"{s} ({u})" for _k, s, _sc, u in SHOWN)
     lines = [

@@ -268,9 +268,9 @@ def vehicle_to_toml(
         lines.append(f"{key} = {_toml_value(tuple(float(a) for a in getattr(vehicle, key)))}")
     for table, rows in (tables or {}).items():
         lines += ["", f"[{table}]"]
-        for key, value, comment in rows:
+        for key, cell, comment in rows:
             lines += _comment(comment)
-            lines.append(f"{key} = {_toml_value(value)}")
+            lines.append(f"{key} = {_toml_value(cell)}")
     return "\n".join(lines) + "\n"
 
 

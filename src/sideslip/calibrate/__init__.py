@@ -47,7 +47,9 @@ GATES = {
 
 def _need_columns(drive: Drive) -> None:
     if "wz" not in drive:
-        raise InputError(drive.path, "calibrate needs the yaw-rate gyro, which is missing or empty", column="wz")
+        raise InputError(
+            drive.path, "calibrate needs the yaw-rate gyro, which is missing or empty", column="wz"
+        )
     if not any(c in drive for c in SPEED_COLUMNS):
         raise InputError(
             drive.path,
@@ -64,10 +66,22 @@ def _roll_stiffness(vehicle: Vehicle, roll: Fitted) -> Fitted:
     mh = vehicle.mass * (vehicle.cg_height - vehicle.roll_axis_height)
     k = mh * (1.0 / roll.value + G)
     if not 1e3 <= k <= 1e7:
-        return left_alone("roll_stiffness", vehicle.roll_stiffness, "N m/rad", "roll gradient absurd", "roll_stiffness")
+        return left_alone(
+            "roll_stiffness", vehicle.roll_stiffness, "N m/rad", "roll gradient absurd", "roll_stiffness"
+        )
     sigma = mh * roll.sigma / roll.value**2
-    return Fitted("roll_stiffness", k, sigma, roll.rows, "k = m h (1 / roll gradient + g)", True, "N m/rad",
-                  vehicle.roll_stiffness, "roll_stiffness", "matches the fitted roll gradient (truth-model form)")
+    return Fitted(
+        "roll_stiffness",
+        k,
+        sigma,
+        roll.rows,
+        "k = m h (1 / roll gradient + g)",
+        True,
+        "N m/rad",
+        vehicle.roll_stiffness,
+        "roll_stiffness",
+        "matches the fitted roll gradient (truth-model form)",
+    )
 
 
 def calibrate(drive: Drive, vehicle: Vehicle) -> Calibration:
@@ -87,7 +101,11 @@ def calibrate(drive: Drive, vehicle: Vehicle) -> Calibration:
     else:
         curv_sd = SCALE_UNKNOWN_SIGMA
     cal = SensorCal(
-        bias.value, gscale.value, wheel.value, k_roll, curv_sd,
+        bias.value,
+        gscale.value,
+        wheel.value,
+        k_roll,
+        curv_sd,
         gscale.sigma / gscale.value if gscale.informed else 0.05,
         G * k_sd / (1.0 + G * k_roll),
     )
@@ -130,8 +148,14 @@ def calibration_toml(cal: Calibration, drive_name: str, vehicle_name: str) -> st
     for f in cal.fitted:
         if f.file_key is not None or not f.informed:
             continue
-        table.append((f.name, f.value, f"1-sigma {_fmt(f.sigma)} {f.unit}, {f.rows} rows: {f.source}"
-                      + (f"; {f.note}" if f.note else "")))
+        table.append(
+            (
+                f.name,
+                f.value,
+                f"1-sigma {_fmt(f.sigma)} {f.unit}, {f.rows} rows: {f.source}"
+                + (f"; {f.note}" if f.note else ""),
+            )
+        )
         table.append((f"{f.name}_sigma", f.sigma, ""))
     notes: list[tuple[str, float | str, str]] = [
         ("calibrated_from", drive_name, ""),
@@ -144,6 +168,4 @@ def calibration_toml(cal: Calibration, drive_name: str, vehicle_name: str) -> st
         "Fitted keys carry their value, 1-sigma, rows and source in the comment above them;",
         "[calibration] holds the sensor calibration (measured / true scales), [notes] what was left.",
     ]
-    return vehicle_to_toml(
-        cal.vehicle, comments, {"calibration": table, "notes": notes}, header=header
-    )
+    return vehicle_to_toml(cal.vehicle, comments, {"calibration": table, "notes": notes}, header=header)

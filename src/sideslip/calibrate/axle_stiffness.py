@@ -240,9 +240,10 @@ def _gauss_newton(
             cl_parts.append(c + offset)
             offset += int(c.max()) + 1 if c.size else 0
         if g is not None:
-            cl_parts.append(clusters_of(g["t"], segment=g["win"]) + offset)
-        fit = fit_linear(np.vstack(J), np.concatenate(res), np.concatenate(cl_parts), prior_mean - theta,
-                         prior_sd, weights)
+            cl_parts.append(clusters_of(g["t"], segment=g["win"].astype(np.intp)) + offset)
+        fit = fit_linear(
+            np.vstack(J), np.concatenate(res), np.concatenate(cl_parts), prior_mean - theta, prior_sd, weights
+        )
         theta = theta + fit.theta
         cov, clusters = fit.cov, fit.clusters
         if np.max(np.abs(fit.theta) / np.where(np.isfinite(prior_sd), prior_sd, 1.0)) < 1e-6:
@@ -289,8 +290,12 @@ def fit_axles(sig: Signals, vehicle: Vehicle, cal: SensorCal) -> list[Fitted]:
     halves = []
     for key in ("v", "a"):  # speed, then lateral acceleration
         split = float(np.median(np.concatenate([x[key] for x in (s, g) if x is not None])))
-        lo = _gauss_newton(_split(s, key, split, True), _split(g, key, split, True), prior_mean, prior_sd, False)
-        hi = _gauss_newton(_split(s, key, split, False), _split(g, key, split, False), prior_mean, prior_sd, False)
+        lo = _gauss_newton(
+            _split(s, key, split, True), _split(g, key, split, True), prior_mean, prior_sd, False
+        )
+        hi = _gauss_newton(
+            _split(s, key, split, False), _split(g, key, split, False), prior_mean, prior_sd, False
+        )
         if lo[2] >= 4 and hi[2] >= 4:
             halves.append((lo, hi))
 
@@ -312,7 +317,9 @@ def _nothing(vehicle: Vehicle, why: str) -> list[Fitted]:
         left_alone("steer_offset_rad", 0.0, "rad", why),
         left_alone("cf", vehicle.cf, "N/rad", why, "cf"),
         left_alone("cr", vehicle.cr, "N/rad", why, "cr"),
-        left_alone("understeer_gradient", vehicle.understeer_gradient, "rad/(m/s^2)", why, "understeer_gradient"),
+        left_alone(
+            "understeer_gradient", vehicle.understeer_gradient, "rad/(m/s^2)", why, "understeer_gradient"
+        ),
         left_alone("slip_gain_k_s2_m", vehicle.slip_gain_k, "s^2/m", why),
         left_alone("steering_ratio", vehicle.steering_ratio, "-", why, "steering_ratio"),
     ]
@@ -338,8 +345,10 @@ def _results(
     out: list[Fitted] = []
     # steer scale: the curvature r/v carries the gyro / wheel scale uncertainty
     sd_scale = math.hypot(float(sd[0]), float(theta[0]) * cal.curvature_scale_sigma)
-    note_s = "" if cal.curvature_scale_sigma < SCALE_FROM_GNSS_MAX else (
-        "relative to gyro and wheel scales taken as 1 (no GNSS to tell them)"
+    note_s = (
+        ""
+        if cal.curvature_scale_sigma < SCALE_FROM_GNSS_MAX
+        else ("relative to gyro and wheel scales taken as 1 (no GNSS to tell them)")
     )
     if n_s and enough and informed(sd_scale, STEER_SCALE_PRIOR):
         out.append(Fitted("steer_scale", float(theta[0]), sd_scale, n_s, src_s, True, "-", 1.0, None, note_s))
@@ -348,8 +357,20 @@ def _results(
     kus_now = float(np.array([0.0, 0.0, m * lr / L, -m * lf / L, 0.0]) @ theta)
     sd_d0 = math.hypot(float(sd[1]), kus_now * AY_OFFSET_SIGMA)
     if n_s and enough and informed(sd_d0, STEER_OFFSET_PRIOR):
-        out.append(Fitted("steer_offset_rad", float(theta[1]), sd_d0, n_s, src_s, True, "rad", 0.0,
-                          None, "includes K_us times the accelerometer's lateral bias"))
+        out.append(
+            Fitted(
+                "steer_offset_rad",
+                float(theta[1]),
+                sd_d0,
+                n_s,
+                src_s,
+                True,
+                "rad",
+                0.0,
+                None,
+                "includes K_us times the accelerometer's lateral bias",
+            )
+        )
     else:
         out.append(left_alone("steer_offset_rad", 0.0, "rad", "no steering rows"))
     srcs = " + ".join(x for x, n in ((src_s, n_s), (src_g, n_g)) if n)
@@ -358,36 +379,98 @@ def _results(
         before = getattr(vehicle, key)
         w_sd = math.hypot(w_sd, w * cal.force_scale_sigma)
         if enough and w > 0 and informed(w_sd, float(prior_sd[k])) and 1e3 <= 1.0 / w <= 5e6:
-            out.append(Fitted(key, 1.0 / w, w_sd / w**2, n_rows, srcs, True, "N/rad", before, key,
-                              "effective axle stiffness (linear range, load transfer included)"))
+            out.append(
+                Fitted(
+                    key,
+                    1.0 / w,
+                    w_sd / w**2,
+                    n_rows,
+                    srcs,
+                    True,
+                    "N/rad",
+                    before,
+                    key,
+                    "effective axle stiffness (linear range, load transfer included)",
+                )
+            )
         else:
-            out.append(left_alone(key, before, "N/rad",
-                                  "the drive separates only the understeer combination" if n_s else
-                                  "no rows to tell it", key))
+            out.append(
+                left_alone(
+                    key,
+                    before,
+                    "N/rad",
+                    "the drive separates only the understeer combination" if n_s else "no rows to tell it",
+                    key,
+                )
+            )
     # understeer gradient K_us = m/L (lr wf - lf wr)
     grad = np.array([0.0, 0.0, m * lr / L, -m * lf / L, 0.0])
     kus = float(grad @ theta)
-    kus_sd = float(math.sqrt(max(grad @ cov @ grad, 0.0) + sys_var(grad) + (kus * cal.force_scale_sigma) ** 2))
+    kus_sd = float(
+        math.sqrt(max(grad @ cov @ grad, 0.0) + sys_var(grad) + (kus * cal.force_scale_sigma) ** 2)
+    )
     prior_kus = math.hypot(*(grad[2:4] * np.where(np.isfinite(prior_sd[2:4]), prior_sd[2:4], 1.0)))
     if n_s and enough and informed(kus_sd, prior_kus) and abs(kus) < 0.05:
-        out.append(Fitted("understeer_gradient", kus, kus_sd, n_s, src_s, True, "rad/(m/s^2)",
-                          vehicle.understeer_gradient, "understeer_gradient", "per lateral tyre force f_y"))
+        out.append(
+            Fitted(
+                "understeer_gradient",
+                kus,
+                kus_sd,
+                n_s,
+                src_s,
+                True,
+                "rad/(m/s^2)",
+                vehicle.understeer_gradient,
+                "understeer_gradient",
+                "per lateral tyre force f_y",
+            )
+        )
     else:
-        out.append(left_alone("understeer_gradient", vehicle.understeer_gradient, "rad/(m/s^2)",
-                              "no steering rows at varied lateral acceleration", "understeer_gradient"))
+        out.append(
+            left_alone(
+                "understeer_gradient",
+                vehicle.understeer_gradient,
+                "rad/(m/s^2)",
+                "no steering rows at varied lateral acceleration",
+                "understeer_gradient",
+            )
+        )
     cr_fit = out[3]
     if cr_fit.informed:
         kk = m * lf / (L * cr_fit.value)
-        out.append(Fitted("slip_gain_k_s2_m", kk, kk * cr_fit.sigma / cr_fit.value, cr_fit.rows, cr_fit.source,
-                          True, "s^2/m", vehicle.slip_gain_k, None, "K = m lf / (L cr), seed 000"))
+        out.append(
+            Fitted(
+                "slip_gain_k_s2_m",
+                kk,
+                kk * cr_fit.sigma / cr_fit.value,
+                cr_fit.rows,
+                cr_fit.source,
+                True,
+                "s^2/m",
+                vehicle.slip_gain_k,
+                None,
+                "K = m lf / (L cr), seed 000",
+            )
+        )
     else:
         out.append(left_alone("slip_gain_k_s2_m", vehicle.slip_gain_k, "s^2/m", "cr not identified"))
     st = out[0]
     if st.informed and math.isfinite(vehicle.steering_ratio):
         ratio = vehicle.steering_ratio * st.value
-        out.append(Fitted("steering_ratio", ratio, vehicle.steering_ratio * st.sigma, st.rows,
-                          "file ratio x steer scale", True, "-", vehicle.steering_ratio, "steering_ratio",
-                          "steer = wheel angle / file ratio, so true ratio = file ratio x steer scale"))
+        out.append(
+            Fitted(
+                "steering_ratio",
+                ratio,
+                vehicle.steering_ratio * st.sigma,
+                st.rows,
+                "file ratio x steer scale",
+                True,
+                "-",
+                vehicle.steering_ratio,
+                "steering_ratio",
+                "steer = wheel angle / file ratio, so true ratio = file ratio x steer scale",
+            )
+        )
     else:
         why = "the file gives no steering ratio to correct" if st.informed else "steer scale not identified"
         out.append(left_alone("steering_ratio", vehicle.steering_ratio, "-", why, "steering_ratio"))

@@ -117,8 +117,10 @@ def fit_linear(
     scale = g / (g - p) if g > p else math.inf
     cov = Hinv @ (meat * scale + Pinv * s2) @ Hinv if math.isfinite(scale) else np.full((p, p), np.inf)
     # parameters the rows cannot reach keep the prior's covariance
-    cov = np.where(np.isfinite(cov), cov, 0.0) if math.isfinite(scale) else np.diag(
-        np.where(np.isfinite(sd0), sd0**2, np.inf)
+    cov = (
+        np.where(np.isfinite(cov), cov, 0.0)
+        if math.isfinite(scale)
+        else np.diag(np.where(np.isfinite(sd0), sd0**2, np.inf))
     )
     rms = float(np.sqrt(np.mean(res**2)))
     return LinearFit(theta, cov, n, g, rms)

@@ -75,14 +75,14 @@ def _cumulative(t: FloatArray, x: FloatArray) -> FloatArray:
 class Signals:
     """Prepared signals.  Row grid (length n): smoothed sensor columns (NaN = unavailable).
 
-    ``speed`` wheel/CAN speed (m/s) and ``speed_source``; ``wz, wx, wy`` gyro (rad/s);
-    ``ax, ay, az`` accelerometer (m/s^2); ``steer`` road-wheel angle (rad); ``yaw_int`` the
-    integral of the raw (interpolated) ``wz`` (rad); ``standstill`` rows.
-    GNSS grid (length m): ``g_rows`` their drive rows; ``g_course`` (rad, unwrapped per run,
-    at the CG), ``g_speed`` (3-D, m/s), ``g_course_rate`` (rad/s), ``g_ax``/``g_ay``
-    (kinematic, m/s^2), ``g_dt`` the receiver interval (s); ``g_valid`` rows where the rates
-    are defined; ``g_run`` the run of consecutive epochs each belongs to; ``g_grade`` the road grade (rad,
-from the vertical Doppler; 0 without ``gnss_vu``).
+        ``speed`` wheel/CAN speed (m/s) and ``speed_source``; ``wz, wx, wy`` gyro (rad/s);
+        ``ax, ay, az`` accelerometer (m/s^2); ``steer`` road-wheel angle (rad); ``yaw_int`` the
+        integral of the raw (interpolated) ``wz`` (rad); ``standstill`` rows.
+        GNSS grid (length m): ``g_rows`` their drive rows; ``g_course`` (rad, unwrapped per run,
+        at the CG), ``g_speed`` (3-D, m/s), ``g_course_rate`` (rad/s), ``g_ax``/``g_ay``
+        (kinematic, m/s^2), ``g_dt`` the receiver interval (s); ``g_valid`` rows where the rates
+        are defined; ``g_run`` the run of consecutive epochs each belongs to; ``g_grade`` the road grade (rad,
+    from the vertical Doppler; 0 without ``gnss_vu``).
     """
 
     t: FloatArray
@@ -117,8 +117,16 @@ def _gnss(drive: Drive, wz: FloatArray, wx: FloatArray | None, lever: tuple[floa
     t = drive.t
     empty = np.zeros(0)
     none = (
-        np.zeros(0, dtype=np.intp), empty, empty, empty, empty, empty, math.nan, np.zeros(0, bool),
-        np.zeros(0, dtype=np.intp), empty,
+        np.zeros(0, dtype=np.intp),
+        empty,
+        empty,
+        empty,
+        empty,
+        empty,
+        math.nan,
+        np.zeros(0, bool),
+        np.zeros(0, dtype=np.intp),
+        empty,
     )
     if not ("gnss_ve" in drive and "gnss_vn" in drive):
         return none
@@ -171,7 +179,9 @@ def prepare(drive: Drive, gnss_lever: tuple[float, float, float]) -> Signals:
     t = drive.t
     raw = speed_raw(drive)
     speed = (
-        moving_mean(t, interpolate(raw, t, MAX_GAP_S), SMOOTH_S) if raw is not None else np.full(t.size, np.nan)
+        moving_mean(t, interpolate(raw, t, MAX_GAP_S), SMOOTH_S)
+        if raw is not None
+        else np.full(t.size, np.nan)
     )
     wz_raw = drive["wz"]
     wz = moving_mean(t, interpolate(wz_raw, t, MAX_GAP_S), SMOOTH_S)

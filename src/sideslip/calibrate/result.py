@@ -56,8 +56,9 @@ class Fitted:
         }
 
 
-def left_alone(name: str, before: float, unit: str, why: str, file_key: str | None = None,
-               sigma: float = math.nan) -> Fitted:
+def left_alone(
+    name: str, before: float, unit: str, why: str, file_key: str | None = None, sigma: float = math.nan
+) -> Fitted:
     """A parameter the drive could not inform: kept at ``before``, with the reason."""
     return Fitted(name, before, sigma, 0, "not identified", False, unit, before, file_key, why)
 

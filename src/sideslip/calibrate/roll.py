@@ -82,9 +82,7 @@ def _combine(a: tuple[float, float], b: tuple[float, float]) -> tuple[float, flo
     return (wa * a[0] + wb * b[0]) / (wa + wb), 1.0 / math.sqrt(wa + wb)
 
 
-def roll_from_gnss(
-    sig: Signals, vehicle: Vehicle
-) -> tuple[Fitted, tuple[float, float, int] | None]:
+def roll_from_gnss(sig: Signals, vehicle: Vehicle) -> tuple[Fitted, tuple[float, float, int] | None]:
     """Roll gradient (Fitted) and the yaw misalignment (value, sigma, rows) from GNSS rows."""
     name, unit = "roll_gradient_rad_per_m_s2", "rad/(m/s^2)"
     before = file_roll_gradient(vehicle)
@@ -113,7 +111,11 @@ def roll_from_gnss(
     # the kinematic a_y is a centred difference over `span`: the same box on the accelerometer
     span = max(RATE_S, 2.0 * sig.g_dt)
     ay_m = moving_mean(sig.t, sig.ay, span)[rows] if sig.g_dt > SMOOTH_S else sig.ay[rows]
-    ax_m = (moving_mean(sig.t, sig.ax, span)[rows] if sig.g_dt > SMOOTH_S else sig.ax[rows]) if sig.ax is not None else None
+    ax_m = (
+        (moving_mean(sig.t, sig.ax, span)[rows] if sig.g_dt > SMOOTH_S else sig.ax[rows])
+        if sig.ax is not None
+        else None
+    )
     ya = ay_m[sel] - ay_kin[sel]
     Xa = np.column_stack([ay_kin[sel], ax_kin[sel]])
     P = project_windows(w, tw, np.column_stack([ya, Xa]))
@@ -140,13 +142,21 @@ def roll_from_gnss(
     rows_used = int(keep.sum())
     roll = (
         Fitted(
-            name, k_phi, k_sd, rows_used,
+            name,
+            k_phi,
+            k_sd,
+            rows_used,
             f"a_y,m - v dcourse/dt vs a_y,kin per {WINDOW_S:g} s window, |a_y|<0.4 g, quasi-steady",
-            True, unit, before, None,
+            True,
+            unit,
+            before,
+            None,
             "assumes the bank does not follow the turns (superelevation would add to it)",
-        )  # fmt: skip
+        )
         if ok
-        else left_alone(name, before, unit, "the drive's lateral accelerations do not tell it", sigma=prior_sd_k)
+        else left_alone(
+            name, before, unit, "the drive's lateral accelerations do not tell it", sigma=prior_sd_k
+        )
     )
     psi_a = (-float(fit.theta[1]), float(sd[1]))
     # a_x relation: a_x,m - a_x,kin = psi_m a_y + c a_x + offset
@@ -175,7 +185,12 @@ def roll_misalignment(sig: Signals, gyro_bias: float, gyro_scale: float) -> tupl
     v = sig.speed[idx]
     r = (sig.wz[idx] - gyro_bias) / gyro_scale
     ay = v * r
-    use = np.isfinite(v) & np.isfinite(r) & (v > V_GNSS_MIN) & (np.abs(np.nan_to_num(ay, nan=99.0)) < AY_LINEAR_MAX)
+    use = (
+        np.isfinite(v)
+        & np.isfinite(r)
+        & (v > V_GNSS_MIN)
+        & (np.abs(np.nan_to_num(ay, nan=99.0)) < AY_LINEAR_MAX)
+    )
     estimates: list[tuple[float, float]] = []
     rows = 0
     for col, kind in ((sig.az, "az"), (sig.wy, "wy")):
@@ -194,8 +209,13 @@ def roll_misalignment(sig: Signals, gyro_bias: float, gyro_scale: float) -> tupl
             X = np.column_stack([r[sel], v[sel] * r[sel] ** 2])
             sign = 1.0
         P = project_windows(win[sel], t[sel], np.column_stack([y[sel], X]))
-        fit, keep = fit_robust(P[:, 1:], P[:, 0], clusters_of(t[sel], segment=win[sel]), None,
-                               np.array([MISALIGN_PRIOR * (G if kind == "az" else 1.0), math.inf]))
+        fit, keep = fit_robust(
+            P[:, 1:],
+            P[:, 0],
+            clusters_of(t[sel], segment=win[sel]),
+            None,
+            np.array([MISALIGN_PRIOR * (G if kind == "az" else 1.0), math.inf]),
+        )
         if fit.clusters < MIN_CLUSTERS:
             continue
         estimates.append((sign * float(fit.theta[0]), float(fit.sigma()[0])))
@@ -214,8 +234,16 @@ def misalignment_fits(
     """The Fitted yaw and roll mounting misalignments (rad)."""
     yname, rname = "imu_yaw_misalignment_rad", "imu_roll_misalignment_rad"
     if yaw is not None and informed(yaw[1], MISALIGN_PRIOR):
-        yfit = Fitted(yname, yaw[0], yaw[1], yaw[2],
-                      "a_y,m vs a_x,kin and a_x,m vs a_y,kin (GNSS), per window", True, "rad", 0.0)
+        yfit = Fitted(
+            yname,
+            yaw[0],
+            yaw[1],
+            yaw[2],
+            "a_y,m vs a_x,kin and a_x,m vs a_y,kin (GNSS), per window",
+            True,
+            "rad",
+            0.0,
+        )
     else:
         yfit = left_alone(yname, 0.0, "rad", "needs GNSS accelerations: not observable here")
     rm = roll_misalignment(sig, gyro_bias, gyro_scale)
@@ -224,9 +252,18 @@ def misalignment_fits(
     else:
         sd = math.hypot(rm[1], CROSSFALL_SIGMA)
         if informed(sd, MISALIGN_PRIOR):
-            rfit = Fitted(rname, rm[0], sd, rm[2],
-                          "a_z,m vs a_y and w_y,m vs r (a_y = v r), per window, v > 5 m/s", True, "rad",
-                          0.0, None, "sensor roll in turns; 1-sigma includes the road's crossfall")
+            rfit = Fitted(
+                rname,
+                rm[0],
+                sd,
+                rm[2],
+                "a_z,m vs a_y and w_y,m vs r (a_y = v r), per window, v > 5 m/s",
+                True,
+                "rad",
+                0.0,
+                None,
+                "sensor roll in turns; 1-sigma includes the road's crossfall",
+            )
         else:
             rfit = left_alone(
                 rname, 0.0, "rad",

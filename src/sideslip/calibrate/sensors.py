@@ -63,7 +63,7 @@ def wheel_speed_scale(sig: Signals) -> Fitted:
     sigma = math.hypot(float(fit.sigma()[0]), SLIP_SIGMA)
     return Fitted(
         name, float(fit.theta[0]), sigma, int(keep.sum()),
-        f"{sig.speed_source} speed vs GNSS Doppler speed, straight |a_x|<{AX_MAX:g} m/s^2",
+        f"speed ({sig.speed_source}) vs GNSS Doppler speed, straight |a_x|<{AX_MAX:g} m/s^2",
         True, unit, 1.0, None, "1-sigma includes 0.15 % tyre slip",
     )  # fmt: skip
 
@@ -142,13 +142,16 @@ def gyro_bias_scale(sig: Signals) -> tuple[Fitted, Fitted]:
     rows_still = n_still if kept[n_gnss:].any() else 0
     enough_windows = int(kept[:n_gnss].sum()) >= MIN_WINDOWS
     enough_still = n_still * float(np.median(np.diff(sig.t))) >= MIN_STILL_S if n_still else False
-    bias_ok = informed(float(sd[1]), GYRO_BIAS_PRIOR, 0.25) and fit.clusters >= 4 and (
-        enough_windows or enough_still
+    bias_ok = (
+        informed(float(sd[1]), GYRO_BIAS_PRIOR, 0.25)
+        and fit.clusters >= 4
+        and (enough_windows or enough_still)
     )
-    scale_ok = n_gnss > 0 and informed(float(sd[0]), GYRO_SCALE_PRIOR) and fit.clusters >= 4 and enough_windows
+    scale_ok = (
+        n_gnss > 0 and informed(float(sd[0]), GYRO_SCALE_PRIOR) and fit.clusters >= 4 and enough_windows
+    )
     bias = (
-        Fitted(bias_name, float(fit.theta[1]), float(sd[1]), rows_gnss + rows_still, src, True,
-               "rad/s", 0.0)
+        Fitted(bias_name, float(fit.theta[1]), float(sd[1]), rows_gnss + rows_still, src, True, "rad/s", 0.0)
         if bias_ok
         else left_alone(bias_name, 0.0, "rad/s", "too little standstill (5 s) or GNSS course (40 s)")
     )
