@@ -61,6 +61,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sideslip.calibrate.fit import (
+    INFORMED_SHARE,
     clusters_of,
     fit_linear,
     informed,
@@ -87,6 +88,9 @@ STEER_SCALE_PRIOR = 0.1  # prior 1-sigma of the steer scale, fraction
 STEER_OFFSET_PRIOR = math.radians(3.0)  # prior 1-sigma of the steer offset, rad
 STIFFNESS_PRIOR_REL = 0.5  # prior 1-sigma of 1/cf, 1/cr relative to the file's
 GN_ITERATIONS = 8
+# 1 - corr^2 of the kinematic and the tyre-force regressors of the steering relation below which
+# the steer scale is not told apart from the understeer (one speed, one turn radius)
+SEPARATION_MIN = 0.01
 SCALE_FROM_GNSS_MAX = 0.012  # curvature-scale sigma below this: gyro / wheel scales came from GNSS
 OUTLIER_SIGMAS = 5.0
 # lateral accelerometer offset (bias ~0.05 m/s^2 plus roll misalignment 0.1 deg x g): it moves
@@ -264,12 +268,29 @@ def _split(
     return _subset(rows, mask) if mask.sum() >= MIN_ROWS else None
 
 
+def _separation(s: dict[str, FloatArray] | None) -> float:
+    """1 - corr^2 of the kinematic and tyre-force regressors (0: steer scale and understeer
+    cannot be told apart)."""
+    if s is None or s["y"].size < 3:
+        return 0.0
+    c = float(np.corrcoef(s["kin"], s["ff"])[0, 1])
+    return 1.0 - c * c if np.isfinite(c) else 0.0
+
+
+def _excited(s: dict[str, FloatArray] | None) -> bool:
+    """Steering rows with turns (95th percentile |f_y| above 1 m/s^2) at varied operating points."""
+    if s is None or s["y"].size < MIN_ROWS:
+        return False
+    return bool(np.percentile(s["a"], 95) > 1.0 and _separation(s) > SEPARATION_MIN)
+
+
 def fit_axles(sig: Signals, vehicle: Vehicle, cal: SensorCal) -> list[Fitted]:
     """Identify steer scale/offset, cf, cr, K_us, K (see the module docstring).
 
     The 1-sigma adds the *operating-point spread*: the same fit on the rows below and above
     the median speed, and below and above the median |f_y|; where two halves differ by more
-    than their noise, half the excess (the larger of the two splits)
+    than their noise, half the excess (the larger of the two splits; a half whose own
+    1-sigma is above half the prior's does not count)
     (``var_sys = ((a' d)^2 - a' (C_lo + C_hi) a) / 4`` for a quantity ``a' theta``) is added, as
     the effective stiffness of real tyres depends on where it is measured.
     """
@@ -286,29 +307,37 @@ def fit_axles(sig: Signals, vehicle: Vehicle, cal: SensorCal) -> list[Fitted]:
     ])  # fmt: skip
     if s is None and g is None:
         return _nothing(vehicle, "too few rows in the linear range (steer, speed, yaw rate)")
+    separation = _separation(s)  # before outliers are dropped (dropping can fake variety)
     theta, cov, clusters, s, g = _gauss_newton(s, g, prior_mean, prior_sd, robust=True)
+    separation = min(separation, _separation(s))
     halves = []
     for key in ("v", "a"):  # speed, then lateral acceleration
         split = float(np.median(np.concatenate([x[key] for x in (s, g) if x is not None])))
-        lo = _gauss_newton(
-            _split(s, key, split, True), _split(g, key, split, True), prior_mean, prior_sd, False
-        )
-        hi = _gauss_newton(
-            _split(s, key, split, False), _split(g, key, split, False), prior_mean, prior_sd, False
-        )
+        parts = [(_split(s, key, split, low), _split(g, key, split, low)) for low in (True, False)]
+        if not all(_excited(ps) for ps, _pg in parts):
+            continue  # a half of straight driving or one operating point tells nothing to compare
+        lo = _gauss_newton(parts[0][0], parts[0][1], prior_mean, prior_sd, False)
+        hi = _gauss_newton(parts[1][0], parts[1][1], prior_mean, prior_sd, False)
         if lo[2] >= 4 and hi[2] >= 4:
             halves.append((lo, hi))
 
+    prior_var = np.where(np.isfinite(prior_sd), prior_sd, 1e6) ** 2
+
     def sys_var(a: FloatArray) -> float:
         out = 0.0
+        a_prior = float(np.sqrt(a**2 @ prior_var))
         for lo, hi in halves:
+            s_lo, s_hi = float(np.sqrt(a @ lo[1] @ a)), float(np.sqrt(a @ hi[1] @ a))
+            if max(s_lo, s_hi) > INFORMED_SHARE * a_prior:
+                continue  # a half that barely tells the quantity shows its prior, not a spread
             d = float(a @ (lo[0] - hi[0]))
-            out = max(out, max(0.0, d * d - float(a @ (lo[1] + hi[1]) @ a)) / 4.0)
+            out = max(out, max(0.0, d * d - s_lo**2 - s_hi**2) / 4.0)
         return out
 
     n_s = int(s["y"].size * s["step"][0]) if s is not None else 0
     n_g = int(g["y"].size) if g is not None else 0
-    return _results(vehicle, theta, cov, sys_var, prior_sd, n_s, n_g, clusters, cal)
+    separable = separation > SEPARATION_MIN
+    return _results(vehicle, theta, cov, sys_var, prior_sd, n_s, n_g, clusters, cal, separable)
 
 
 def _nothing(vehicle: Vehicle, why: str) -> list[Fitted]:
@@ -335,6 +364,7 @@ def _results(
     n_g: int,
     clusters: int,
     cal: SensorCal,
+    separable: bool,
 ) -> list[Fitted]:
     m, lf, lr, L = vehicle.mass, vehicle.lf, vehicle.lr, vehicle.wheelbase
     eye = np.eye(theta.size)
@@ -350,10 +380,15 @@ def _results(
         if cal.curvature_scale_sigma < SCALE_FROM_GNSS_MAX
         else ("relative to gyro and wheel scales taken as 1 (no GNSS to tell them)")
     )
-    if n_s and enough and informed(sd_scale, STEER_SCALE_PRIOR):
+    if n_s and enough and separable and informed(sd_scale, STEER_SCALE_PRIOR):
         out.append(Fitted("steer_scale", float(theta[0]), sd_scale, n_s, src_s, True, "-", 1.0, None, note_s))
     else:
-        out.append(left_alone("steer_scale", 1.0, "-", "no steering rows at varied speeds"))
+        why = (
+            "no steering rows at varied speeds"
+            if separable or not n_s
+            else ("one operating point: the steer scale cannot be told from the understeer")
+        )
+        out.append(left_alone("steer_scale", 1.0, "-", why))
     kus_now = float(np.array([0.0, 0.0, m * lr / L, -m * lf / L, 0.0]) @ theta)
     sd_d0 = math.hypot(float(sd[1]), kus_now * AY_OFFSET_SIGMA)
     if n_s and enough and informed(sd_d0, STEER_OFFSET_PRIOR):

@@ -14,7 +14,9 @@ Roll gradient ``k_phi`` (rad per m/s^2 of lateral tyre force per mass, steady st
 ``a_x,kin = d|v|/dt`` and an offset and slope per ``WINDOW_S`` window (accelerometer bias, roll
 misalignment, crossfall).  Assumes the road's bank does not follow the turns: superelevated
 curves add ``g bank / a_y`` to ``g k_phi`` (flagged in the note, not detectable here).
-Left and right turns are also fitted apart; where they disagree beyond their noise (a bank
+A fit outside 0.0005-0.05 rad/(m/s^2) is no suspension's (a bank that follows the turns,
+e.g. a banked track turn, drives it negative) and is rejected.  Left and right turns are also
+fitted apart; where they disagree beyond their noise (a bank
 that changes with the turns), half the excess is added to the 1-sigma.
 The same GNSS rows give ``psi_m`` twice (the a_y and a_x relations), averaged by their variances.
 
@@ -60,6 +62,10 @@ ROLL_PRIOR_REL = 0.5  # prior 1-sigma of the file's roll gradient, fraction
 ROLL_SIGMA_ABS = 0.002  # rad/(m/s^2): without a file value, "informed" means sigma below this
 MISALIGN_PRIOR = math.radians(2.0)  # prior 1-sigma of a mounting misalignment, rad
 MIN_CLUSTERS = 4
+# plausible suspension roll gradients, rad/(m/s^2): a body rolls outwards (> 0); 0.05 is ~28 deg/g
+ROLL_GRADIENT_MIN = 0.0005
+ROLL_GRADIENT_MAX = 0.05
+LR_MIN_ROWS = 20  # rows beyond 1 m/s^2 each way for the left / right check
 GNSS_DT_MAX = 0.5  # s: the roll relation needs GNSS at 2 Hz or faster (quasi-steady a_y over 2 epochs)
 # The roll misalignment and the road's bank in turns enter every relation together (the sensor
 # sees bank + suspension roll + misalignment).  Road crossfall is 1-3 deg (drainage), so the
@@ -131,14 +137,23 @@ def roll_from_gnss(sig: Signals, vehicle: Vehicle) -> tuple[Fitted, tuple[float,
     a = ay_kin[sel]
     Xlr = np.column_stack([np.where(a > 0, a, 0.0), np.where(a < 0, a, 0.0), ax_kin[sel]])
     Plr = project_windows(w, tw, np.column_stack([ya, Xlr]))
+    both = min(int((a > 1.0).sum()), int((a < -1.0).sum())) >= LR_MIN_ROWS
     flr, _ = fit_robust(Plr[:, 1:], Plr[:, 0], cl)
-    if flr.clusters >= MIN_CLUSTERS:
+    if both and flr.clusters >= MIN_CLUSTERS:
         d = float(flr.theta[0] - flr.theta[1]) / G
         noise = float(flr.cov[0, 0] + flr.cov[1, 1] - 2 * flr.cov[0, 1]) / G**2
         k_sd = math.sqrt(k_sd**2 + max(0.0, d * d - noise) / 4.0)
     ok = fit.clusters >= MIN_CLUSTERS and (
         informed(k_sd, prior_sd_k) if math.isfinite(prior_sd_k) else k_sd < ROLL_SIGMA_ABS
     )
+    plausible = ROLL_GRADIENT_MIN < k_phi < ROLL_GRADIENT_MAX
+    if ok and not plausible:
+        why = (
+            f"fit {k_phi:.4f} rad/(m/s^2) is no suspension's: the road's bank follows the turns"
+            if k_phi <= ROLL_GRADIENT_MIN
+            else f"fit {k_phi:.4f} rad/(m/s^2) is beyond any car's roll"
+        )
+        return left_alone(name, before, unit, why, sigma=prior_sd_k), None
     rows_used = int(keep.sum())
     roll = (
         Fitted(
