@@ -292,7 +292,10 @@ def fit_axles(sig: Signals, vehicle: Vehicle, cal: SensorCal) -> list[Fitted]:
     than their noise, half the excess (the larger of the two splits; a half whose own
     1-sigma is above half the prior's does not count)
     (``var_sys = ((a' d)^2 - a' (C_lo + C_hi) a) / 4`` for a quantity ``a' theta``) is added, as
-    the effective stiffness of real tyres depends on where it is measured.
+    the effective stiffness of real tyres depends on where it is measured.  When the steering
+    rows cannot tell the steer scale from the understeer (one operating point, ``1 - corr^2``
+    of the two regressors below ``SEPARATION_MIN``), the other parameters carry the spread of
+    refits with the scale pinned at its prior +- 1-sigma.
     """
     s = _steer_rows(sig, vehicle, cal)
     g = _rear_rows(sig, vehicle, cal)
@@ -337,6 +340,17 @@ def fit_axles(sig: Signals, vehicle: Vehicle, cal: SensorCal) -> list[Fitted]:
     n_s = int(s["y"].size * s["step"][0]) if s is not None else 0
     n_g = int(g["y"].size) if g is not None else 0
     separable = separation > SEPARATION_MIN
+    if not separable and s is not None:
+        # the drive cannot tell the steer scale from the understeer: the other parameters are
+        # refitted with the scale pinned at +- its prior 1-sigma, and half the spread is added
+        shifted = []
+        for sign in (-1.0, 1.0):
+            pm, ps = prior_mean.copy(), prior_sd.copy()
+            pm[0], ps[0] = theta[0] + sign * STEER_SCALE_PRIOR, 1e-6
+            shifted.append(_gauss_newton(s, g, pm, ps, False)[0])
+        d = 0.5 * (shifted[1] - shifted[0])
+        d[0] = 0.0
+        cov = cov + np.outer(d, d)
     return _results(vehicle, theta, cov, sys_var, prior_sd, n_s, n_g, clusters, cal, separable)
 
 

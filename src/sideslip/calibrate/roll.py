@@ -14,6 +14,8 @@ Roll gradient ``k_phi`` (rad per m/s^2 of lateral tyre force per mass, steady st
 ``a_x,kin = d|v|/dt`` and an offset and slope per ``WINDOW_S`` window (accelerometer bias, roll
 misalignment, crossfall).  Assumes the road's bank does not follow the turns: superelevated
 curves add ``g bank / a_y`` to ``g k_phi`` (flagged in the note, not detectable here).
+A road whose bank varies (seen on its straights, where ``a_y,m - a_y,kin = g bank``) widens
+the 1-sigma by what that variation could add if it followed the turns (:func:`_bank_allowance`).
 A fit outside 0.0005-0.05 rad/(m/s^2) is no suspension's (a bank that follows the turns,
 e.g. a banked track turn, drives it negative) and is rejected.  Left and right turns are also
 fitted apart; where they disagree beyond their noise (a bank
@@ -65,7 +67,8 @@ MIN_CLUSTERS = 4
 # plausible suspension roll gradients, rad/(m/s^2): a body rolls outwards (> 0); 0.05 is ~28 deg/g
 ROLL_GRADIENT_MIN = 0.0005
 ROLL_GRADIENT_MAX = 0.05
-LR_MIN_ROWS = 20  # rows beyond 1 m/s^2 each way for the left / right check
+LR_MIN_ROWS = 20
+STRAIGHT_AY = 0.3  # m/s^2: straight rows for the bank-variation allowance  # rows beyond 1 m/s^2 each way for the left / right check
 GNSS_DT_MAX = 0.5  # s: the roll relation needs GNSS at 2 Hz or faster (quasi-steady a_y over 2 epochs)
 # The roll misalignment and the road's bank in turns enter every relation together (the sensor
 # sees bank + suspension roll + misalignment).  Road crossfall is 1-3 deg (drainage), so the
@@ -86,6 +89,30 @@ def file_roll_gradient(vehicle: Vehicle) -> float:
 def _combine(a: tuple[float, float], b: tuple[float, float]) -> tuple[float, float]:
     wa, wb = 1.0 / a[1] ** 2, 1.0 / b[1] ** 2
     return (wa * a[0] + wb * b[0]) / (wa + wb), 1.0 / math.sqrt(wa + wb)
+
+
+def _bank_allowance(y: FloatArray, a: FloatArray, window: NDArray[np.intp]) -> float:
+    """1-sigma (rad/(m/s^2)) a varying road bank may add to the roll gradient.
+
+    On straight rows ``y = a_y,m - a_y,kin`` is ``g bank`` plus a constant: the spread of its
+    per-window means (robust, 1.4826 MAD) is the road's bank variation ``sigma_b`` (rad).  A
+    bank that changes with the turns moves the slope by up to ``sigma_b / rms(a_y)``; over
+    ``N`` independent turning windows it averages as ``1 / sqrt(N)``.
+    """
+    g = int(window.max()) + 1 if window.size else 0
+    if g == 0:
+        return 0.0
+    straight = np.abs(a) < STRAIGHT_AY
+    cnt = np.bincount(window[straight], minlength=g)
+    mean = np.bincount(window[straight], weights=y[straight], minlength=g) / np.maximum(cnt, 1)
+    m = mean[cnt >= 10]
+    turning = np.abs(a) > 1.0
+    n_turn = int(np.sum(np.bincount(window[turning], minlength=g) >= 5))
+    if m.size < 3 or n_turn == 0:
+        return 0.0
+    sigma_b = 1.4826 * float(np.median(np.abs(m - np.median(m)))) / G
+    rms_a = float(np.sqrt(np.mean(a[turning] ** 2)))
+    return sigma_b / rms_a / math.sqrt(n_turn)
 
 
 def roll_from_gnss(sig: Signals, vehicle: Vehicle) -> tuple[Fitted, tuple[float, float, int] | None]:
@@ -133,8 +160,9 @@ def roll_from_gnss(sig: Signals, vehicle: Vehicle) -> tuple[Fitted, tuple[float,
     )
     sd = fit.sigma()
     k_phi, k_sd = float(fit.theta[0]) / G, float(sd[0]) / G
-    # left and right turns apart: a bank that changes with the turns shows as disagreement
     a = ay_kin[sel]
+    k_sd = math.hypot(k_sd, _bank_allowance(ya, a, w))
+    # left and right turns apart: a bank that changes with the turns shows as disagreement
     Xlr = np.column_stack([np.where(a > 0, a, 0.0), np.where(a < 0, a, 0.0), ax_kin[sel]])
     Plr = project_windows(w, tw, np.column_stack([ya, Xlr]))
     both = min(int((a > 1.0).sum()), int((a < -1.0).sum())) >= LR_MIN_ROWS
