@@ -174,6 +174,23 @@ def _gnss(drive: Drive, wz: FloatArray, wx: FloatArray | None, lever: tuple[floa
     return rows, out, speed, rate, acc, ay, dt_g, valid, run, np.nan_to_num(grade)
 
 
+def _tilt_cosine(drive: Drive, t: FloatArray, speed: FloatArray, wz: FloatArray) -> FloatArray:
+    """cos(roll) cos(pitch) of the body from the accelerometer: the horizontal heading rate is
+    ``w_z / (cos(phi) cos(theta))`` (Euler kinematics, ``w_z = psi' cos(phi) cos(theta) -
+    theta' sin(phi)``), which matters in banked curves (5 deg: 0.4 %).  ``sin(phi) ~ (a_y,m -
+    v r) / g``, ``sin(theta) ~ -(a_x,m - v') / g``; 1 where the accelerometer is missing."""
+    out = np.ones_like(t)
+    ay, ax = _smoothed(drive, "ay"), _smoothed(drive, "ax")
+    v = np.nan_to_num(speed)
+    if ay is not None:
+        s_phi = np.clip(np.nan_to_num((ay - v * np.nan_to_num(wz)) / G), -0.5, 0.5)
+        out *= np.sqrt(1.0 - s_phi**2)
+    if ax is not None:
+        s_theta = np.clip(np.nan_to_num((ax - derivative(t, v)) / G), -0.5, 0.5)
+        out *= np.sqrt(1.0 - s_theta**2)
+    return out
+
+
 def prepare(drive: Drive, gnss_lever: tuple[float, float, float]) -> Signals:
     """Prepare the signals of ``drive``; ``gnss_lever`` the antenna lever arm (m, from the CG)."""
     t = drive.t
@@ -187,7 +204,7 @@ def prepare(drive: Drive, gnss_lever: tuple[float, float, float]) -> Signals:
     wz = moving_mean(t, interpolate(wz_raw, t, MAX_GAP_S), SMOOTH_S)
     wx = _smoothed(drive, "wx")
     wz_interp = interpolate(wz_raw, t, MAX_GAP_S)
-    yaw_int = _cumulative(t, wz_interp)
+    yaw_int = _cumulative(t, wz_interp / _tilt_cosine(drive, t, speed, wz))
     g = _gnss(drive, wz_raw, drive.get("wx"), gnss_lever)
     still = np.abs(np.nan_to_num(speed, nan=1.0)) < STANDSTILL_MPS
     if "gnss_ve" in drive and "gnss_vn" in drive:

@@ -67,8 +67,8 @@ MIN_CLUSTERS = 4
 # plausible suspension roll gradients, rad/(m/s^2): a body rolls outwards (> 0); 0.05 is ~28 deg/g
 ROLL_GRADIENT_MIN = 0.0005
 ROLL_GRADIENT_MAX = 0.05
-LR_MIN_ROWS = 20
-STRAIGHT_AY = 0.3  # m/s^2: straight rows for the bank-variation allowance  # rows beyond 1 m/s^2 each way for the left / right check
+LR_MIN_ROWS = 20  # rows beyond 1 m/s^2 each way for the left / right check
+STRAIGHT_AY = 0.3  # m/s^2: straight rows for the bank-variation allowance
 GNSS_DT_MAX = 0.5  # s: the roll relation needs GNSS at 2 Hz or faster (quasi-steady a_y over 2 epochs)
 # The roll misalignment and the road's bank in turns enter every relation together (the sensor
 # sees bank + suspension roll + misalignment).  Road crossfall is 1-3 deg (drainage), so the
