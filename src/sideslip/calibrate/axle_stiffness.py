@@ -91,6 +91,10 @@ GN_ITERATIONS = 8
 # 1 - corr^2 of the kinematic and the tyre-force regressors of the steering relation below which
 # the steer scale is not told apart from the understeer (one speed, one turn radius)
 SEPARATION_MIN = 0.01
+# a vehicle file's explicit understeer gradient is taken as a prior of this relative 1-sigma
+# (a rough file's tyre data are 20-35 % off) plus a floor, rad/(m/s^2)
+KUS_FILE_REL = 0.3
+KUS_FILE_FLOOR = 3.0e-4
 SCALE_FROM_GNSS_MAX = 0.012  # curvature-scale sigma below this: gyro / wheel scales came from GNSS
 OUTLIER_SIGMAS = 5.0
 # lateral accelerometer offset (bias ~0.05 m/s^2 plus roll misalignment 0.1 deg x g): it moves
@@ -213,8 +217,13 @@ def _gauss_newton(
     prior_mean: FloatArray,
     prior_sd: FloatArray,
     robust: bool,
+    extra: tuple[FloatArray, float, float] | None = None,
 ) -> tuple[FloatArray, FloatArray, int, dict[str, FloatArray] | None, dict[str, FloatArray] | None]:
-    """Gauss-Newton on both relations; returns theta, cov, clusters and the rows kept."""
+    """Gauss-Newton on both relations; returns theta, cov, clusters and the rows kept.
+
+    ``extra = (a, value, sigma)``: a prior on the linear quantity ``a' theta`` (the file's own
+    understeer gradient), one pseudo-row weighted by ``1 / sigma^2``.
+    """
     theta = np.where(np.isfinite(prior_mean), prior_mean, 0.0).astype(float)
     cov = np.diag(np.where(np.isfinite(prior_sd), prior_sd**2, 0.0))
     clusters = 0
@@ -236,6 +245,10 @@ def _gauss_newton(
             break
         # each relation weighted by its own residual variance (both in rad)
         sig2 = [max(float(np.mean(rr**2)), 1e-14) for rr in res]
+        if extra is not None:
+            res.append(np.array([extra[1] - float(extra[0] @ theta)]))
+            J.append(extra[0][None, :])
+            sig2.append(extra[2] ** 2)
         weights = np.concatenate([np.full(rr.size, 1.0 / v2) for rr, v2 in zip(res, sig2, strict=True)])
         cl_parts = []
         offset = 0
@@ -244,7 +257,11 @@ def _gauss_newton(
             cl_parts.append(c + offset)
             offset += int(c.max()) + 1 if c.size else 0
         if g is not None:
-            cl_parts.append(clusters_of(g["t"], segment=g["win"].astype(np.intp)) + offset)
+            c = clusters_of(g["t"], segment=g["win"].astype(np.intp))
+            cl_parts.append(c + offset)
+            offset += int(c.max()) + 1 if c.size else 0
+        if extra is not None:
+            cl_parts.append(np.array([offset], dtype=np.intp))
         fit = fit_linear(
             np.vstack(J), np.concatenate(res), np.concatenate(cl_parts), prior_mean - theta, prior_sd, weights
         )
@@ -311,7 +328,16 @@ def fit_axles(sig: Signals, vehicle: Vehicle, cal: SensorCal) -> list[Fitted]:
     if s is None and g is None:
         return _nothing(vehicle, "too few rows in the linear range (steer, speed, yaw rate)")
     separation = _separation(s)  # before outliers are dropped (dropping can fake variety)
-    theta, cov, clusters, s, g = _gauss_newton(s, g, prior_mean, prior_sd, robust=True)
+    extra = None
+    if math.isfinite(vehicle.understeer_gradient_given):
+        # the file's own understeer gradient is information too: a prior of 30 % (rough files)
+        kus_file = vehicle.understeer_gradient_given
+        a_kus = (
+            np.array([0.0, 0.0, vehicle.mass * vehicle.lr, -vehicle.mass * vehicle.lf, 0.0])
+            / vehicle.wheelbase
+        )
+        extra = (a_kus, kus_file, KUS_FILE_REL * abs(kus_file) + KUS_FILE_FLOOR)
+    theta, cov, clusters, s, g = _gauss_newton(s, g, prior_mean, prior_sd, True, extra)
     separation = min(separation, _separation(s))
     halves = []
     for key in ("v", "a"):  # speed, then lateral acceleration
@@ -319,8 +345,8 @@ def fit_axles(sig: Signals, vehicle: Vehicle, cal: SensorCal) -> list[Fitted]:
         parts = [(_split(s, key, split, low), _split(g, key, split, low)) for low in (True, False)]
         if not all(_excited(ps) for ps, _pg in parts):
             continue  # a half of straight driving or one operating point tells nothing to compare
-        lo = _gauss_newton(parts[0][0], parts[0][1], prior_mean, prior_sd, False)
-        hi = _gauss_newton(parts[1][0], parts[1][1], prior_mean, prior_sd, False)
+        lo = _gauss_newton(parts[0][0], parts[0][1], prior_mean, prior_sd, False, extra)
+        hi = _gauss_newton(parts[1][0], parts[1][1], prior_mean, prior_sd, False, extra)
         if lo[2] >= 4 and hi[2] >= 4:
             halves.append((lo, hi))
 
@@ -347,7 +373,7 @@ def fit_axles(sig: Signals, vehicle: Vehicle, cal: SensorCal) -> list[Fitted]:
         for sign in (-1.0, 1.0):
             pm, ps = prior_mean.copy(), prior_sd.copy()
             pm[0], ps[0] = theta[0] + sign * STEER_SCALE_PRIOR, 1e-6
-            shifted.append(_gauss_newton(s, g, pm, ps, False)[0])
+            shifted.append(_gauss_newton(s, g, pm, ps, False, extra)[0])
         d = 0.5 * (shifted[1] - shifted[0])
         d[0] = 0.0
         cov = cov + np.outer(d, d)
