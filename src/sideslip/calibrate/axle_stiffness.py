@@ -90,7 +90,7 @@ STIFFNESS_PRIOR_REL = 0.5  # prior 1-sigma of 1/cf, 1/cr relative to the file's
 GN_ITERATIONS = 8
 # 1 - corr^2 of the kinematic and the tyre-force regressors of the steering relation below which
 # the steer scale is not told apart from the understeer (one speed, one turn radius)
-SEPARATION_MIN = 0.01
+SEPARATION_MIN = 0.03
 # a vehicle file's explicit understeer gradient is taken as a prior of this relative 1-sigma
 # (a rough file's tyre data are 20-35 % off) plus a floor, rad/(m/s^2)
 KUS_FILE_REL = 0.3
@@ -100,6 +100,9 @@ OUTLIER_SIGMAS = 5.0
 # lateral accelerometer offset (bias ~0.05 m/s^2 plus roll misalignment 0.1 deg x g): it moves
 # delta_0 by K_us times itself, which the drive cannot tell from a steering-sensor offset
 AY_OFFSET_SIGMA = 0.06
+# the vehicle's own straight-running steer (alignment, tyre ply steer / conicity) enters the
+# offset like the sensor's and cannot be told from it: an allowance of 0.015 deg road wheel
+STEER_OFFSET_FLOOR = math.radians(0.015)
 MIN_ROWS = 50
 
 
@@ -430,7 +433,7 @@ def _results(
         )
         out.append(left_alone("steer_scale", 1.0, "-", why))
     kus_now = float(np.array([0.0, 0.0, m * lr / L, -m * lf / L, 0.0]) @ theta)
-    sd_d0 = math.hypot(float(sd[1]), kus_now * AY_OFFSET_SIGMA)
+    sd_d0 = math.sqrt(float(sd[1]) ** 2 + (kus_now * AY_OFFSET_SIGMA) ** 2 + STEER_OFFSET_FLOOR**2)
     if n_s and enough and informed(sd_d0, STEER_OFFSET_PRIOR):
         out.append(
             Fitted(
