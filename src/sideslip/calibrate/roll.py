@@ -17,8 +17,8 @@ curves add ``g bank / a_y`` to ``g k_phi`` (flagged in the note, not detectable 
 A road whose bank varies (seen on its straights, where ``a_y,m - a_y,kin = g bank``) widens
 the 1-sigma by what that variation could add if it followed the turns (:func:`_bank_allowance`).
 A fit outside 0.0005-0.05 rad/(m/s^2) is no suspension's (a bank that follows the turns,
-e.g. a banked track turn, drives it negative) and is rejected.  Left and right turns are also
-fitted apart; where they disagree beyond their noise (a bank
+e.g. a banked track turn, drives it negative) and is rejected.  Left and right turns, and the rows of small and larger lateral jerk (roll lags a fast
+a_y), are also fitted apart; where they disagree beyond their noise (a bank
 that changes with the turns), half the excess is added to the 1-sigma.
 The same GNSS rows give ``psi_m`` twice (the a_y and a_x relations), averaged by their variances.
 
@@ -162,6 +162,16 @@ def roll_from_gnss(sig: Signals, vehicle: Vehicle) -> tuple[Fitted, tuple[float,
     k_phi, k_sd = float(fit.theta[0]) / G, float(sd[0]) / G
     a = ay_kin[sel]
     k_sd = math.hypot(k_sd, _bank_allowance(ya, a, w))
+    # the steadier half of the rows apart: roll lags a fast-changing a_y (a slalom), which shows
+    # as a different slope on the rows of small lateral jerk
+    steady = np.abs(jerk[sel]) < 0.5 * JERK_MAX
+    if steady.sum() >= 30 and (~steady).sum() >= 30:
+        fs, _ = fit_robust(P[steady, 1:], P[steady, 0], cl[steady])
+        fq, _ = fit_robust(P[~steady, 1:], P[~steady, 0], cl[~steady])
+        if fs.clusters >= MIN_CLUSTERS and fq.clusters >= MIN_CLUSTERS:
+            d = float(fs.theta[0] - fq.theta[0]) / G
+            noise = float(fs.cov[0, 0] + fq.cov[0, 0]) / G**2
+            k_sd = math.sqrt(k_sd**2 + max(0.0, d * d - noise) / 4.0)
     # left and right turns apart: a bank that changes with the turns shows as disagreement
     Xlr = np.column_stack([np.where(a > 0, a, 0.0), np.where(a < 0, a, 0.0), ax_kin[sel]])
     Plr = project_windows(w, tw, np.column_stack([ya, Xlr]))
