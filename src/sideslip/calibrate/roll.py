@@ -17,9 +17,10 @@ curves add ``g bank / a_y`` to ``g k_phi`` (flagged in the note, not detectable 
 A road whose bank varies (seen on its straights, where ``a_y,m - a_y,kin = g bank``) widens
 the 1-sigma by what that variation could add if it followed the turns (:func:`_bank_allowance`).
 A fit outside 0.0005-0.05 rad/(m/s^2) is no suspension's (a bank that follows the turns,
-e.g. a banked track turn, drives it negative) and is rejected.  Left and right turns, and the rows of small and larger lateral jerk (roll lags a fast
-a_y), are also fitted apart; where they disagree beyond their noise (a bank
-that changes with the turns), half the excess is added to the 1-sigma.
+e.g. a banked track turn, drives it negative) and is rejected.  Left and right turns, and the
+rows of small and larger lateral jerk (roll lags a fast a_y), are also fitted apart; where they
+disagree beyond their noise (a bank that changes with the turns, roll dynamics), half the
+excess is added to the 1-sigma.
 The same GNSS rows give ``psi_m`` twice (the a_y and a_x relations), averaged by their variances.
 
 Roll misalignment ``phi_m``: ``a_z,m = -(phi_m + bank) a_y - k_phi a_y^2 + offset`` and
