@@ -6,8 +6,12 @@ Cornering stiffness ``cf``/``cr`` is per axle in N/rad.  Papers that quote it pe
 
 from __future__ import annotations
 
+import json
 import math
+import os
+import tempfile
 import tomllib
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, fields
 from importlib import resources
 from pathlib import Path
@@ -209,3 +213,96 @@ def load_vehicle(name_or_path: str | Path) -> Vehicle:
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
         raise InputError(source, f"not valid TOML ({exc})") from None
     return _parse(table, source, stem)
+
+
+# ---- writing ------------------------------------------------------------------------------
+TomlValue = float | int | str
+TableRows = Sequence[tuple[str, TomlValue, str]]
+
+
+def _toml_value(value: TomlValue | tuple[float, ...]) -> str:
+    if isinstance(value, str):
+        return json.dumps(value)  # a JSON string is a valid TOML basic string
+    if isinstance(value, tuple):
+        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, int):
+        return str(value)
+    if not math.isfinite(value):
+        raise ValueError(f"cannot write {value!r} to TOML: expected a finite number")
+    return repr(float(value))
+
+
+def _comment(text: str) -> list[str]:
+    return [f"# {line}" if line else "#" for line in text.splitlines()] if text else []
+
+
+def vehicle_to_toml(
+    vehicle: Vehicle,
+    notes: Mapping[str, str] | None = None,
+    tables: Mapping[str, TableRows] | None = None,
+    header: Sequence[str] = (),
+) -> str:
+    """A vehicle file (contract section 2) that :func:`load_vehicle` reads back to ``vehicle``.
+
+    ``notes`` maps a parameter key (``cf``, ``sensors.gnss_xyz``, ...) to a comment written on
+    the lines above it; parameters the vehicle lacks (NaN) are left out, with their note if
+    one is given.  ``tables`` adds the user's own tables (e.g. ``[calibration]``,
+    ``[notes]``; ignored by the loader) as rows ``(key, value, comment)``.
+    """
+    notes = notes or {}
+    lines = [*_comment("\n".join(header))]
+    lines += ["[vehicle]", f"name = {_toml_value(vehicle.name)}"]
+    for key in (*PARAMETERS, *OPTIONAL_PARAMETERS):
+        field_name = "understeer_gradient_given" if key == "understeer_gradient" else key
+        value = float(getattr(vehicle, field_name))
+        lines += _comment(notes.get(key, ""))
+        if math.isfinite(value):
+            lines.append(f"{key} = {_toml_value(value)}")
+        elif key in notes:
+            lines.append(f"# {key} not given")
+    lines += ["", "[sensors]"]
+    for key in ("imu_xyz", "gnss_xyz"):
+        lines += _comment(notes.get(f"sensors.{key}", ""))
+        lines.append(f"{key} = {_toml_value(tuple(float(a) for a in getattr(vehicle, key)))}")
+    for table, rows in (tables or {}).items():
+        lines += ["", f"[{table}]"]
+        for key, cell, comment in rows:
+            lines += _comment(comment)
+            lines.append(f"{key} = {_toml_value(cell)}")
+    return "\n".join(lines) + "\n"
+
+
+def save_vehicle(
+    vehicle: Vehicle,
+    path: str | Path,
+    notes: Mapping[str, str] | None = None,
+    tables: Mapping[str, TableRows] | None = None,
+    header: Sequence[str] = (),
+) -> None:
+    """Write :func:`vehicle_to_toml` to ``path`` atomically (never half-written)."""
+    save_vehicle_text(vehicle_to_toml(vehicle, notes, tables, header), path)
+
+
+def save_vehicle_text(text: str, path: str | Path) -> None:
+    """Write vehicle-file text atomically: a temporary file in the same folder, then rename."""
+    p = Path(path)
+    if p.suffix.lower() != ".toml":
+        raise InputError(str(path), "expected an output path ending in .toml")
+    tomllib.loads(text)  # never write a file that would not load
+    try:
+        p.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(dir=p.parent, prefix=f".{p.name}.", suffix=".part")
+    except OSError as exc:
+        raise InputError(str(path), f"cannot write ({exc.strerror})") from None
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+            fh.write(text)
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)
+        os.replace(tmp, p)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise

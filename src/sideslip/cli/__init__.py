@@ -4,13 +4,16 @@ One module per command (or family of commands); each registers itself on the sha
 ``app`` when imported here.
 """
 
-from sideslip.cli import batch, bench, convert, demo, estimate, evaluate, info, report, simulate, vehicle
+from sideslip.cli import (
+    batch, bench, calibrate, convert, demo, estimate, evaluate, info, report, simulate, vehicle,
+)  # fmt: skip
 from sideslip.cli.app import app, main
 
 __all__ = [
     "app",
     "batch",
     "bench",
+    "calibrate",
     "convert",
     "demo",
     "estimate",

@@ -1,0 +1,163 @@
+"""Wheel-speed scale, gyro bias and gyro scale from GNSS Doppler and standstill.
+
+Wheel-speed scale (measured / true) ``s_w``: on straight, unaccelerated GNSS rows
+(``|a_x| < AX_MAX``, ``|course rate| < STRAIGHT_RATE``, faster than 5 m/s), the speed the
+drive's methods use (``sideslip.signals.speed_raw``: rear wheels, else all wheels, else CAN)
+against the 3-D Doppler speed, ``v_wheel = s_w v_gnss`` (seed 004's wheel-speed scale state,
+seed 000's SF = 1 / s_w).  Tyre longitudinal slip (0.1-0.3 % on driven wheels at cruise) cannot
+be told from a radius error and is added to the 1-sigma as ``SLIP_SIGMA``.
+
+Gyro (``w_z = s_g r + b_g``): over non-overlapping windows of ``GYRO_WINDOW_S`` between GNSS
+epochs of one run, the integrated gyro against the course change,
+``int w_z dt = s_g (nu_1 - nu_0) + b_g T`` (the sideslip change over a window, which averages
+out over a turn's entry and exit, is the residual; the spread between the drive's two halves
+beyond their noise is added to the 1-sigma), and at standstill (wheels and GNSS at rest)
+``int w_z dt = b_g T`` over 1 s pieces (seed 001's zero-rate update).  Without GNSS only the
+bias is told, from standstill; the scale is left at 1 and said so.  ``b_g`` is the drive's
+average bias (the bias walks; the robust 1-sigma covers the walk between stops).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numpy.typing import NDArray
+
+from sideslip.calibrate.fit import clusters_of, fit_robust, informed
+from sideslip.calibrate.prepare import Signals
+from sideslip.calibrate.result import Fitted, left_alone
+
+FloatArray = NDArray[np.float64]
+
+AX_MAX = 0.5  # m/s^2: little drive/brake slip
+STRAIGHT_RATE = 0.05  # rad/s: the wheels of both sides and the CG share the speed
+SLIP_SIGMA = 0.0015  # tyre longitudinal slip at cruise, fraction (not separable from radius)
+GYRO_WINDOW_S = 2.0  # s: window of the gyro-vs-course relation
+GYRO_SCALE_PRIOR = 0.05  # prior 1-sigma of the gyro scale (MEMS: 0.2-2 %), fraction
+GYRO_BIAS_PRIOR = 0.02  # rad/s: prior 1-sigma of the gyro bias (~1 deg/s)
+MIN_ROWS = 20
+MIN_WINDOWS = 20  # GNSS windows (40 s of driving): fewer cannot average the sideslip changes out
+MIN_STILL_S = 5.0  # s of standstill that tell the bias alone
+
+
+def wheel_speed_scale(sig: Signals) -> Fitted:
+    """The wheel/CAN speed scale s_w (measured / true) from the GNSS Doppler speed."""
+    name, unit = "wheel_speed_scale", "-"
+    if not sig.has_gnss:
+        return left_alone(name, 1.0, unit, "no GNSS Doppler: the speed scale is not observable")
+    rows = sig.g_rows
+    v = sig.speed[rows]
+    sel = (
+        sig.g_valid
+        & np.isfinite(v)
+        & (np.abs(np.nan_to_num(sig.g_ax, nan=9.0)) < AX_MAX)
+        & (np.abs(np.nan_to_num(sig.g_course_rate, nan=9.0)) < STRAIGHT_RATE)
+    )
+    if sel.sum() < MIN_ROWS:
+        return left_alone(name, 1.0, unit, "too few straight, steady GNSS rows above 5 m/s")
+    x = sig.g_speed[sel][:, None]
+    fit, keep = fit_robust(x, v[sel], clusters_of(sig.t[rows][sel]))
+    if fit.clusters < 4:
+        return left_alone(name, 1.0, unit, "too few independent stretches of straight driving")
+    sigma = math.hypot(float(fit.sigma()[0]), SLIP_SIGMA)
+    return Fitted(
+        name, float(fit.theta[0]), sigma, int(keep.sum()),
+        f"speed ({sig.speed_source}) vs GNSS Doppler speed, straight |a_x|<{AX_MAX:g} m/s^2",
+        True, unit, 1.0, None, "1-sigma includes 0.15 % tyre slip",
+    )  # fmt: skip
+
+
+def gyro_bias_scale(sig: Signals) -> tuple[Fitted, Fitted]:
+    """Gyro bias b_g (rad/s) and scale s_g (measured / true) from course changes and standstill."""
+    X_parts: list[FloatArray] = []
+    y_parts: list[FloatArray] = []
+    t_parts: list[FloatArray] = []
+    n_gnss = 0
+    if sig.has_gnss:
+        k = max(1, round(GYRO_WINDOW_S / sig.g_dt))
+        j0 = np.arange(0, sig.g_rows.size - k, k)
+        j1 = j0 + k
+        ok = (sig.g_run[j0] == sig.g_run[j1]) & (
+            sig.t[sig.g_rows[j1]] - sig.t[sig.g_rows[j0]] < 1.5 * k * sig.g_dt
+        )
+        j0, j1 = j0[ok], j1[ok]
+        r0, r1 = sig.g_rows[j0], sig.g_rows[j1]
+        dpsi = sig.g_course[j1] - sig.g_course[j0]
+        dt = sig.t[r1] - sig.t[r0]
+        X_parts.append(np.column_stack([dpsi, dt]))
+        y_parts.append(sig.yaw_int[r1] - sig.yaw_int[r0])
+        t_parts.append(sig.t[r0])
+        n_gnss = int(j0.size)
+    # standstill: 1 s pieces
+    still = np.flatnonzero(sig.standstill)
+    n_still = 0
+    if still.size:
+        piece = np.floor(sig.t[still]).astype(np.int64)
+        brk = np.flatnonzero((np.diff(piece) != 0) | (np.diff(still) != 1)) + 1
+        starts = np.concatenate([[0], brk])
+        ends = np.concatenate([brk, [still.size]]) - 1
+        a, b = still[starts], still[ends]
+        dt = sig.t[b] - sig.t[a]
+        use = dt > 0.5
+        a, b, dt = a[use], b[use], dt[use]
+        X_parts.append(np.column_stack([np.zeros(a.size), dt]))
+        y_parts.append(sig.yaw_int[b] - sig.yaw_int[a])
+        t_parts.append(sig.t[a])
+        n_still = int(np.sum(b - a + 1))
+    bias_name, scale_name = "gyro_bias_rad_s", "gyro_scale"
+    if not X_parts or sum(p.shape[0] for p in X_parts) < 3:
+        return (
+            left_alone(bias_name, 0.0, "rad/s", "no GNSS course and no standstill"),
+            left_alone(scale_name, 1.0, "-", "no GNSS course: the gyro scale is not observable"),
+        )
+    X = np.vstack(X_parts)
+    y = np.concatenate(y_parts)
+    tt = np.concatenate(t_parts)
+    order = np.argsort(tt, kind="stable")
+    X, y, tt = X[order], y[order], tt[order]
+    prior_mean = np.array([1.0, 0.0])
+    prior_sd = np.array([GYRO_SCALE_PRIOR, GYRO_BIAS_PRIOR])
+    fit, keep = fit_robust(X, y, clusters_of(tt), prior_mean, prior_sd)
+    sd = fit.sigma()
+    # the two halves of the drive apart: a spread beyond their noise (sideslip changes that
+    # do not average out, bias walk) is added to the 1-sigma
+    half = tt < np.median(tt)
+    if half.sum() > 10 and (~half).sum() > 10:
+        f1, _ = fit_robust(X[half], y[half], clusters_of(tt[half]), prior_mean, prior_sd)
+        f2, _ = fit_robust(X[~half], y[~half], clusters_of(tt[~half]), prior_mean, prior_sd)
+        d = f1.theta - f2.theta
+        noise = np.diag(f1.cov) + np.diag(f2.cov)
+        sd = np.sqrt(sd**2 + np.maximum(0.0, d * d - noise) / 4.0)
+    src_bits = []
+    if n_gnss:
+        src_bits.append(f"course change over {GYRO_WINDOW_S:g} s windows")
+    if n_still:
+        src_bits.append("standstill")
+    src = "gyro integral vs " + " + ".join(src_bits)
+    kept = np.empty_like(keep)
+    kept[order] = keep
+    epochs_per_window = max(1, round(GYRO_WINDOW_S / sig.g_dt)) if n_gnss else 0
+    rows_gnss = int(kept[:n_gnss].sum()) * epochs_per_window
+    rows_still = n_still if kept[n_gnss:].any() else 0
+    enough_windows = int(kept[:n_gnss].sum()) >= MIN_WINDOWS
+    enough_still = n_still * float(np.median(np.diff(sig.t))) >= MIN_STILL_S if n_still else False
+    bias_ok = (
+        informed(float(sd[1]), GYRO_BIAS_PRIOR, 0.25)
+        and fit.clusters >= 4
+        and (enough_windows or enough_still)
+    )
+    scale_ok = (
+        n_gnss > 0 and informed(float(sd[0]), GYRO_SCALE_PRIOR) and fit.clusters >= 4 and enough_windows
+    )
+    bias = (
+        Fitted(bias_name, float(fit.theta[1]), float(sd[1]), rows_gnss + rows_still, src, True, "rad/s", 0.0)
+        if bias_ok
+        else left_alone(bias_name, 0.0, "rad/s", "too little standstill (5 s) or GNSS course (40 s)")
+    )
+    scale = (
+        Fitted(scale_name, float(fit.theta[0]), float(sd[0]), rows_gnss, src, True, "-", 1.0)
+        if scale_ok
+        else left_alone(scale_name, 1.0, "-", "too little GNSS course in turns (40 s): not observable")
+    )
+    return bias, scale
