@@ -5,8 +5,18 @@ One module per command (or family of commands); each registers itself on the sha
 """
 
 from sideslip.cli import (
-    batch, bench, calibrate, convert, demo, estimate, evaluate, info, report, simulate, vehicle,
-)  # fmt: skip
+    batch,
+    bench,
+    calibrate,
+    convert,
+    demo,
+    estimate,
+    evaluate,
+    info,
+    report,
+    simulate,
+    vehicle,
+)
 from sideslip.cli.app import app, main
 
 __all__ = [
