@@ -103,6 +103,7 @@ from sideslip.methods.doppler_roll import (
     roll_from_lateral,
     scan_ay_bias,
 )
+from sideslip.methods.doppler_stats import block_jackknife_std, honest_std, time_blocks
 from sideslip.methods.registry import SPEED, register
 from sideslip.models.dead_reckoning import dead_reckon, horizontal_speed, horizontal_yaw_rate
 from sideslip.signals import hold, speed_raw, vehicle_speed
@@ -116,11 +117,13 @@ K_MIN_GY = 0.5  # m/s^2: "in curves"
 K_MIN_SAMPLES = 50
 K_MIN_GY_SPAN = 1.0  # m/s^2: the G_y values must span at least this much
 K_CORR_S = 1.0  # s: one independent K sample per this time
+K_BLOCK_S = 10.0  # s: jackknife blocks of the K samples (longer than a curve's model error)
 HEADING_MAX_GY = 1.0  # m/s^2: heading fit only where the sideslip is small
 SMOOTH_S = 0.5  # s: centred moving average of a_y,m and psi' V (roll, G_y)
 V_KIN = 1.0  # m/s: floor of V in the kinematic term l_r r / V
 BETA_FLOOR = np.radians(0.1)  # rad: floor of beta_std
 SF_BOUNDS = (0.8, 1.25)
+SF_MODEL_SIGMA = 1e-3  # -: longitudinal tyre slip / rolling-radius term of the SF 1-sigma
 N_PASSES = 3
 SCAN_KNOT_S = 600.0  # s: offset knots of the stiff heading fit behind the delta G_y scan
 SCAN_BIAS_RW = 3.0e-4  # rad/s per SCAN_KNOT_S, 1-sigma
@@ -139,14 +142,19 @@ class SlipGain:
     residual_std: float
 
 
-def fit_slip_gain(gy: FloatArray, beta_r: FloatArray, per_second: float) -> SlipGain:
+def fit_slip_gain(
+    gy: FloatArray, beta_r: FloatArray, per_second: float, t: FloatArray | None = None
+) -> SlipGain:
     """Eq 20: least-squares slope of beta_r,Doppler (rad) on G_y (m/s^2), with guards.
 
     ``per_second``: samples per second (for the correlation inflation of the 1-sigma).
+    ``t``: the samples' times (s); when given, the 1-sigma is also the block jackknife's over
+    ``K_BLOCK_S`` blocks (:mod:`sideslip.methods.doppler_stats`), whichever is larger.
     Returns ``applied = False`` with the reason when the data cannot support K.
     """
     ok = np.isfinite(gy) & np.isfinite(beta_r)
     x, y = gy[ok], beta_r[ok]
+    ts = t[ok] if t is not None else None
     if x.size < K_MIN_SAMPLES:
         return SlipGain(0.0, np.inf, 0.0, int(x.size), False,
                         f"too few curve samples ({x.size} < {K_MIN_SAMPLES}): "
@@ -171,6 +179,17 @@ def fit_slip_gain(gy: FloatArray, beta_r: FloatArray, per_second: float) -> Slip
     inflate = np.sqrt(max(per_second * K_CORR_S, 1.0))
     k_std = float(res_std / np.sqrt(sxx) * inflate) if sxx > 0 else np.inf
     n = int(keep.sum())
+    if ts is not None and np.isfinite(k_std):
+        xk, yk = x[keep], y[keep]
+        labels = time_blocks(ts[keep], K_BLOCK_S)
+
+        def slope(mask: NDArray[np.bool_]) -> float:
+            xm, ym = xk[mask], yk[mask]
+            d = float(np.sum((xm - xm.mean()) ** 2))
+            return -float(np.sum((xm - xm.mean()) * (ym - ym.mean())) / d) if d > 0 else np.nan
+
+        n_blocks = int(np.unique(labels).size)
+        k_std = honest_std(k_std, max(n_blocks - 2, 1), block_jackknife_std(labels, slope))
     reason = ""
     if span < K_MIN_GY_SPAN:
         reason = f"G_y of the curve samples spans {span:.2f} m/s^2 < {K_MIN_GY_SPAN}"
@@ -184,15 +203,21 @@ def fit_slip_gain(gy: FloatArray, beta_r: FloatArray, per_second: float) -> Slip
 
 
 def wheel_scale_factor(
-    v_gnss: FloatArray, v_wheel: FloatArray
-) -> tuple[float, str]:
-    """Eq 4's SF (true over measured): least squares of GNSS speed on wheel speed, outliers out."""
+    v_gnss: FloatArray, v_wheel: FloatArray, t: FloatArray | None = None
+) -> tuple[float, float, str]:
+    """Eq 4's SF (true over measured): least squares of GNSS speed on wheel speed, outliers out.
+
+    Returns (SF, its 1-sigma, note).  The 1-sigma is the larger of the formal one (t-scaled,
+    one independent sample per ``K_CORR_S``) and the block jackknife's over ``K_BLOCK_S``
+    blocks of the samples' times ``t`` (s; inf when ``t`` is not given and too few samples).
+    """
     ok = np.isfinite(v_gnss) & np.isfinite(v_wheel) & (v_wheel > HEADING_MIN_SPEED)
     x, y = v_wheel[ok], v_gnss[ok]
     if x.size < 20:
-        return 1.0, "too few moving GNSS samples: SF = 1"
+        return 1.0, float("inf"), "too few moving GNSS samples: SF = 1"
     keep = np.ones(x.size, dtype=bool)
     sf = 1.0
+    s = 1e-3
     for _ in range(6):
         sf = float(np.sum(x[keep] * y[keep]) / np.sum(x[keep] ** 2))
         res = y - sf * x
@@ -201,9 +226,27 @@ def wheel_scale_factor(
         if new.sum() < 20 or np.array_equal(new, keep):
             break
         keep = new
+    sigma = float("inf")
+    if t is not None:
+        tk = t[ok][keep]
+        xk, yk = x[keep], y[keep]
+        span = max(float(tk[-1] - tk[0]), 1e-6)
+        corr = max(keep.sum() / span * K_CORR_S, 1.0)
+        formal = max(s, 1e-3) / float(np.sqrt(np.sum(xk**2))) * float(np.sqrt(corr))
+        labels = time_blocks(tk, K_BLOCK_S)
+
+        def fit(mask: NDArray[np.bool_]) -> float:
+            return float(np.sum(xk[mask] * yk[mask]) / np.sum(xk[mask] ** 2))
+
+        n_blocks = int(np.unique(labels).size)
+        sigma = honest_std(formal, max(n_blocks - 1, 1), block_jackknife_std(labels, fit))
+        # GNSS speed and rolling speed also differ by the driven tyres' longitudinal slip and
+        # the radius' growth with speed (0.1-0.3 % for road cars, Gillespie 1992 ch. 2): a
+        # model term the residuals cannot show, since it moves every sample alike
+        sigma = float(np.hypot(sigma, SF_MODEL_SIGMA))
     if not SF_BOUNDS[0] <= sf <= SF_BOUNDS[1]:
-        return 1.0, f"fitted SF = {sf:.3f} implausible: SF = 1"
-    return sf, ""
+        return 1.0, float("inf"), f"fitted SF = {sf:.3f} implausible: SF = 1"
+    return sf, sigma, ""
 
 
 def _pitch(drive: Drive, speed: FloatArray, width: int) -> tuple[FloatArray, str]:
@@ -260,13 +303,17 @@ def run_doppler_slip(drive: Drive, vehicle: Vehicle, use_roll: bool = True) -> E
     params["yaw_rate_course_correlation"] = check_yaw_rate_sign(t, wz, samples, drive.path)
     raw = speed_raw(drive)
     sf_reason = "no GNSS Doppler: SF = 1"
-    sf = 1.0
+    sf, sf_sigma = 1.0, float("inf")
     if raw is not None and samples.rows.size:
         v_w = hold(raw, t)[0][samples.rows]
-        sf, sf_reason = wheel_scale_factor(samples.speed, np.abs(v_w))
+        sf, sf_sigma, sf_reason = wheel_scale_factor(samples.speed, np.abs(v_w), t[samples.rows])
     pitch, pitch_src = _pitch(drive, speed, width)
     v_h = horizontal_speed(speed, sf, pitch)
-    params.update(wheel_scale_factor=sf, wheel_scale_factor_note=sf_reason, pitch_source=pitch_src)
+    params.update(
+        wheel_scale_factor=sf, wheel_scale_factor_note=sf_reason, pitch_source=pitch_src,
+        # naming convention (measured/true): the inverse of eq 4's SF
+        wheel_speed_scale=1.0 / sf, wheel_speed_scale_sigma=sf_sigma / sf**2,
+    )
 
     # --- iterate: heading -> ay bias and roll -> slip gain -> heading ...------------------------
     still_rows = np.flatnonzero(still)
@@ -314,7 +361,7 @@ def run_doppler_slip(drive: Drive, vehicle: Vehicle, use_roll: bool = True) -> E
         sel = (samples.speed > K_MIN_SPEED) & (np.abs(gy[rows]) > K_MIN_GY) & (
             np.abs(r_s[rows]) < 1.0
         )
-        gain = fit_slip_gain(gy[rows][sel], beta_d[sel], rate_gnss)
+        gain = fit_slip_gain(gy[rows][sel], beta_d[sel], rate_gnss, t[rows][sel])
         beta_r_model = -gain.k * gy
 
     if fit is None:  # pragma: no cover - N_PASSES >= 1
