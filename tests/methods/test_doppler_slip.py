@@ -401,3 +401,60 @@ def test_without_lr_the_rear_axle_sideslip_is_output_and_said() -> None:
     est = doppler_slip(drive, vehicle)
     assert est.params["beta_point"].startswith("rear axle")
     assert np.isfinite(est["beta"]).all()
+
+
+# ---- self-check: transient lag, honest beta_std, health ------------------------------------
+def _two_sigma_share(drive: Drive, est) -> float:
+    mv = moving(drive)
+    err = np.abs(est["beta"] - drive["ref_beta"])[mv]
+    return float(np.mean(err < 2.0 * est["beta_std"][mv]))
+
+
+def test_slip_lag_is_identified_near_the_friction_limit_and_helps() -> None:
+    # race lap (seed 002's car near mu): the steady-state relation lags the turn-ins; the
+    # Doppler innovations identify the lag (significant at 3 sigma) and the corrected beta is
+    # better than the steady-state one (measured 0.48 -> 0.23 deg RMSE)
+    from tests.conftest import sim_drive
+
+    drive = sim_drive("race_lap", 0)
+    vehicle = load_vehicle(drive.meta["vehicle"])
+    est = run_doppler_slip(drive, vehicle)
+    p = est.params
+    assert p["slip_lag_applied"] and 0.05 < p["slip_lag_s"] < 0.6
+    mv = moving(drive)
+    rmse = rms_deg((est["beta"] - drive["ref_beta"])[mv])
+    assert rmse < 0.35  # steady-state relation alone: 0.48 deg
+    assert _two_sigma_share(drive, est) >= 0.9
+
+
+@pytest.mark.parametrize("scenario", ["urban_course", "urban_highway"])
+def test_lag_not_significant_on_urban_drives_is_not_applied(scenario: str) -> None:
+    drive, est = estimate(scenario)
+    assert not est.params["slip_lag_applied"] and "not significant" in est.params["slip_lag_note"]
+
+
+@pytest.mark.parametrize("use_roll", [True, False])
+def test_beta_std_honest_on_a_low_mu_slalom_and_a_banked_lane_change(use_roll: bool) -> None:
+    # 0.5 Hz slalom at 140 km/h on mu 0.25 (unmodelled lag) and a lane change on a 16 deg bank
+    # (the no-roll variant's relation leaves out the bank): a calibrated 1-sigma keeps about
+    # 95 % of the errors inside 2 sigma; 0.9 is the acceptance bound (before: 0.74 and 0.49)
+    from tests.conftest import sim_drive
+
+    for scenario in ("slalom_low_mu", "dlc_bank"):
+        drive = sim_drive(scenario, 0)
+        est = run_doppler_slip(drive, load_vehicle(drive.meta["vehicle"]), use_roll=use_roll)
+        assert _two_sigma_share(drive, est) >= 0.9, scenario
+
+
+def test_health_flags_reversing_and_long_outages_and_is_bounded() -> None:
+    from tests.methods.robust_drives import parking_drive
+
+    drive = parking_drive(0)
+    est = doppler_slip(drive, load_vehicle("midsize_sedan"))
+    h = est["health"]
+    assert np.all(np.isfinite(h)) and h.min() >= 0.0 and h.max() <= 1.0
+    rev = drive["ref_vx"] < -1.0
+    assert np.all(h[rev] == 1.0)
+    fast = drive["ref_vx"] > 6.0
+    assert np.median(h[fast]) < 0.5
+    assert "flagged_share" in est.params["health"]

@@ -96,6 +96,7 @@ from sideslip.methods.doppler_heading import (
     course_samples,
     fit_heading,
 )
+from sideslip.methods.doppler_health import LAG_MAX_S, doppler_health, fit_slip_lag
 from sideslip.methods.doppler_roll import (
     AyBiasScan,
     curve_windows,
@@ -398,6 +399,33 @@ def run_doppler_slip(drive: Drive, vehicle: Vehicle, use_roll: bool = True) -> E
     else:
         k_unc = k_vehicle if np.isfinite(k_vehicle) else 0.01
     beta_std = np.hypot(k_unc * np.abs(gy), BETA_FLOOR)
+    if not use_roll and "ay" in drive:
+        # the no-roll relation leaves out g sin(roll) (bank, body roll); where the drive has an
+        # accelerometer the size of what it leaves out is known: K |a_y,m - psi' V|
+        ay_chk = moving_average(hold(drive["ay"], t)[0], width)
+        beta_std = np.hypot(beta_std, k_used * np.abs(ay_chk - gy))
+    # self-check against the Doppler sideslip (doppler_health): transient lag, inflation, health
+    gate = samples.speed > K_MIN_SPEED
+    b_dopp = wrap_angle(samples.course - fit.yaw[rows]) - _antenna_offset(
+        r_corr, wx, v_h, lr, arm3
+    )[rows]
+    rate_term = k_used * moving_average(np.gradient(gy, t) if n > 1 else np.zeros(n), width)
+    lag = fit_slip_lag(t[rows][gate], rate_term[rows][gate],
+                       wrap_angle(b_dopp - beta_r[rows] - gain.intercept)[gate])
+    params.update(lag.params())
+    if lag.applied:
+        beta_r = np.where(forward, beta_r + lag.tau_s * rate_term, 0.0)
+        beta = np.clip(np.where(forward, beta + lag.tau_s * rate_term, 0.0), -0.5, 0.5)
+        beta_std = np.hypot(beta_std, lag.tau_s_sigma * np.abs(rate_term))
+    else:  # the unmodelled lag is an error of up to hypot(max(tau, 0), sigma_tau) K dG_y/dt
+        lag_unc = min(float(np.hypot(max(lag.tau_s, 0.0), lag.tau_s_sigma)), LAG_MAX_S)
+        beta_std = np.hypot(beta_std, lag_unc * np.abs(rate_term))
+    check = doppler_health(
+        t, rows[gate], b_dopp[gate], beta_r[rows][gate] + gain.intercept, samples.sigma[gate],
+        beta_std, forward, speed <= -0.1,
+    )
+    beta_std = check.beta_std
+    params["health"] = check.summary
 
     # --- dead reckoning (eqs 1-4) from the first GNSS fix ---------------------------------------
     yaw = fit.yaw
@@ -422,6 +450,7 @@ def run_doppler_slip(drive: Drive, vehicle: Vehicle, use_roll: bool = True) -> E
         "e_noslip": e_ns,
         "n_noslip": n_ns,
         "gyro_bias": fit.gyro_bias,
+        "health": check.health,
     }
     if use_roll:
         series["roll"] = roll
@@ -445,7 +474,9 @@ def run_doppler_slip(drive: Drive, vehicle: Vehicle, use_roll: bool = True) -> E
     )
     for key, value in series.items():
         series[key] = np.nan_to_num(np.asarray(value, dtype=float), nan=0.0, posinf=0.0, neginf=0.0)
-    return Estimate("doppler_slip" if use_roll else "doppler_slip_noroll", t, series, params)
+    innovations = {"doppler_sideslip": check.innovation, "doppler_sideslip_nis": check.nis}
+    return Estimate("doppler_slip" if use_roll else "doppler_slip_noroll", t, series, params,
+                    innovations)
 
 
 @register(
