@@ -429,7 +429,7 @@ def test_slip_lag_is_identified_near_the_friction_limit_and_helps() -> None:
 
 @pytest.mark.parametrize("scenario", ["urban_course", "urban_highway"])
 def test_lag_not_significant_on_urban_drives_is_not_applied(scenario: str) -> None:
-    drive, est = estimate(scenario)
+    _drive, est = estimate(scenario)
     assert not est.params["slip_lag_applied"] and "not significant" in est.params["slip_lag_note"]
 
 
