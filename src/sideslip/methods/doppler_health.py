@@ -119,7 +119,8 @@ class SlipLag:
                 "slip_lag_applied": self.applied, "slip_lag_note": self.note}
 
 
-def fit_slip_lag(t_rows: FloatArray, rate_term: FloatArray, innovation: FloatArray) -> SlipLag:
+def fit_slip_lag(t_rows: FloatArray, rate_term: FloatArray, innovation: FloatArray,
+                 min_z: float = LAG_MIN_Z) -> SlipLag:
     """Lag tau of ``beta_r = -K (G_y - tau dG_y/dt)``, identified from the Doppler sideslip.
 
     Eqs 10-14 are the steady state of the single track; in a transient the sideslip lags
@@ -151,7 +152,7 @@ def fit_slip_lag(t_rows: FloatArray, rate_term: FloatArray, innovation: FloatArr
 
     sigma = honest_std(formal, max(int(np.unique(labels).size) - 1, 1),
                        block_jackknife_std(labels, fit))
-    if not np.isfinite(sigma) or tau < LAG_MIN_Z * sigma:
+    if not np.isfinite(sigma) or tau < min_z * sigma:
         return SlipLag(tau, sigma, False,
                        f"lag {tau:.3f} +- {sigma:.2g} s not significant: steady-state relation kept")
     if tau > LAG_MAX_S:

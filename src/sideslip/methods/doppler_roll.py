@@ -293,6 +293,7 @@ def scan_ay_bias(
     step: float = SCAN_STEP,
     fit_scale: bool = True,
     max_std: float = DGY_MAX_STD,
+    min_curves: int = MIN_CURVES,
 ) -> AyBiasScan:
     """Scan eq 19 over delta G_y for every curve window; see the module docstring.
 
@@ -419,8 +420,8 @@ def scan_ay_bias(
     chosen = {"weighted_median": wmedian, "median": median, "mean": mean, "joint": joint_v}[combine]
     std = joint_std
     reason = ""
-    if active.sum() < MIN_CURVES:
-        reason = (f"only {int(active.sum())} usable curves (at least {MIN_CURVES} needed to solve "
+    if active.sum() < min_curves:
+        reason = (f"only {int(active.sum())} usable curves (at least {min_curves} needed to solve "
                   "delta G_y with the gyro scale): set to 0")
         chosen = 0.0
     elif not np.isfinite(std) or std > max_std:

@@ -96,8 +96,16 @@ from sideslip.methods.doppler_heading import (
     course_samples,
     fit_heading,
 )
-from sideslip.methods.doppler_health import LAG_MAX_S, doppler_health, fit_slip_lag
+from sideslip.methods.doppler_health import (
+    LAG_MAX_S,
+    LAG_MIN_Z,
+    SlipLag,
+    doppler_health,
+    fit_slip_lag,
+)
 from sideslip.methods.doppler_roll import (
+    DGY_MAX_STD,
+    MIN_CURVES,
     AyBiasScan,
     curve_windows,
     moving_average,
@@ -113,7 +121,7 @@ from sideslip.vehicle import G, Vehicle
 FloatArray = NDArray[np.float64]
 
 K_MAX = 0.03  # s^2/m: beyond any road car (passenger cars 0.002-0.015)
-K_MIN_SPEED = 5.0  # m/s: speed gate of the K samples (Doppler course noise sigma_v / V)
+K_MIN_SPEED = 5.0  # m/s: default speed gate of the K samples (Doppler course noise sigma_v/V)
 K_MIN_GY = 0.5  # m/s^2: "in curves"
 K_MIN_SAMPLES = 50
 K_MIN_GY_SPAN = 1.0  # m/s^2: the G_y values must span at least this much
@@ -128,6 +136,32 @@ SF_MODEL_SIGMA = 1e-3  # -: longitudinal tyre slip / rolling-radius term of the 
 N_PASSES = 3
 SCAN_KNOT_S = 600.0  # s: offset knots of the stiff heading fit behind the delta G_y scan
 SCAN_BIAS_RW = 3.0e-4  # rad/s per SCAN_KNOT_S, 1-sigma
+
+
+@dataclass(frozen=True)
+class DopplerSlipSettings:
+    """Tuning of ``doppler_slip`` and ``doppler_slip_noroll`` (defaults: module docstring).
+
+    ``k_min_speed_m_s``: speed gate of the eq-20 samples (m/s); ``dgy_max_sigma_m_s2``: the
+    honest 1-sigma of delta G_y (m/s^2) above which it is not applied; ``dgy_min_curves``:
+    curve windows needed for delta G_y; ``slip_lag``: identify and apply the transient lag of
+    the slip relation (doppler_health); ``slip_lag_min_z``: its significance, in sigma.
+    """
+
+    k_min_speed_m_s: float = K_MIN_SPEED
+    dgy_max_sigma_m_s2: float = DGY_MAX_STD
+    dgy_min_curves: int = MIN_CURVES
+    slip_lag: bool = True
+    slip_lag_min_z: float = LAG_MIN_Z
+
+    def __post_init__(self) -> None:
+        checks = (("k_min_speed_m_s", self.k_min_speed_m_s, 0.5, 50.0),
+                  ("dgy_max_sigma_m_s2", self.dgy_max_sigma_m_s2, 0.0, 5.0),
+                  ("dgy_min_curves", self.dgy_min_curves, 3, 1000),
+                  ("slip_lag_min_z", self.slip_lag_min_z, 0.0, 100.0))  # fmt: skip
+        for name, value, lo, hi in checks:
+            if not (np.isfinite(value) and lo <= value <= hi):
+                raise ValueError(f"DopplerSlipSettings.{name} = {value}: expected {lo:g} ... {hi:g}")
 
 
 @dataclass(frozen=True)
@@ -280,8 +314,10 @@ def _antenna_offset(
     return np.asarray(((arm[0] + lr) * r - arm[2] * wx) / v, dtype=float)
 
 
-def run_doppler_slip(drive: Drive, vehicle: Vehicle, use_roll: bool = True) -> Estimate:
+def run_doppler_slip(drive: Drive, vehicle: Vehicle, use_roll: bool = True,
+                     settings: DopplerSlipSettings | None = None) -> Estimate:
     """The full pipeline of the module docstring; ``use_roll=False`` is the no-roll variant."""
+    st = settings or DopplerSlipSettings()
     t = drive.t
     n = t.size
     dt = drive.dt_median if n > 1 else 0.01
@@ -346,7 +382,8 @@ def run_doppler_slip(drive: Drive, vehicle: Vehicle, use_roll: bool = True) -> E
             transient = moving_average(
                 np.gradient(r_s * arm_ay + v_h * beta_r_model, t), width
             )
-            scan = scan_ay_bias(t, rate_c, ay_s, r_s * v_h + transient, windows)
+            scan = scan_ay_bias(t, rate_c, ay_s, r_s * v_h + transient, windows,
+                                max_std=st.dgy_max_sigma_m_s2, min_curves=st.dgy_min_curves)
             roll = roll_from_lateral(ay_s, r_s, v_h, scan.ay_bias, transient)
             roll_raw = roll_from_lateral(ay_s, r_s, v_h, 0.0, transient)
             rate_h = horizontal_yaw_rate(wz, 0.0, roll, pitch)
@@ -359,7 +396,7 @@ def run_doppler_slip(drive: Drive, vehicle: Vehicle, use_roll: bool = True) -> E
         beta_d = wrap_angle(samples.course - fit.yaw[rows]) - _antenna_offset(
             r_corr, wx, v_h, lr, arm3
         )[rows]
-        sel = (samples.speed > K_MIN_SPEED) & (np.abs(gy[rows]) > K_MIN_GY) & (
+        sel = (samples.speed > st.k_min_speed_m_s) & (np.abs(gy[rows]) > K_MIN_GY) & (
             np.abs(r_s[rows]) < 1.0
         )
         gain = fit_slip_gain(gy[rows][sel], beta_d[sel], rate_gnss, t[rows][sel])
@@ -405,13 +442,15 @@ def run_doppler_slip(drive: Drive, vehicle: Vehicle, use_roll: bool = True) -> E
         ay_chk = moving_average(hold(drive["ay"], t)[0], width)
         beta_std = np.hypot(beta_std, k_used * np.abs(ay_chk - gy))
     # self-check against the Doppler sideslip (doppler_health): transient lag, inflation, health
-    gate = samples.speed > K_MIN_SPEED
+    gate = samples.speed > st.k_min_speed_m_s
     b_dopp = wrap_angle(samples.course - fit.yaw[rows]) - _antenna_offset(
         r_corr, wx, v_h, lr, arm3
     )[rows]
     rate_term = k_used * moving_average(np.gradient(gy, t) if n > 1 else np.zeros(n), width)
     lag = fit_slip_lag(t[rows][gate], rate_term[rows][gate],
-                       wrap_angle(b_dopp - beta_r[rows] - gain.intercept)[gate])
+                       wrap_angle(b_dopp - beta_r[rows] - gain.intercept)[gate], st.slip_lag_min_z)
+    if not st.slip_lag and lag.applied:
+        lag = SlipLag(lag.tau_s, lag.tau_s_sigma, False, "slip lag switched off (settings)")
     params.update(lag.params())
     if lag.applied:
         beta_r = np.where(forward, beta_r + lag.tau_s * rate_term, 0.0)
@@ -485,10 +524,12 @@ def run_doppler_slip(drive: Drive, vehicle: Vehicle, use_roll: bool = True) -> E
     summary="slip gain K from GNSS Doppler/IMU heading, roll via the a_y error scan, "
     "slip-corrected dead reckoning (no steering, no tyre data)",
     paper="seed 000 (Takikawa et al. 2021)",
+    settings=DopplerSlipSettings,
 )
-def doppler_slip(drive: Drive, vehicle: Vehicle) -> Estimate:
+def doppler_slip(drive: Drive, vehicle: Vehicle, settings: DopplerSlipSettings | None = None
+                 ) -> Estimate:
     """Seed 000's full method; see the module docstring."""
-    return run_doppler_slip(drive, vehicle, use_roll=True)
+    return run_doppler_slip(drive, vehicle, use_roll=True, settings=settings)
 
 
 @register(
@@ -496,7 +537,9 @@ def doppler_slip(drive: Drive, vehicle: Vehicle) -> Estimate:
     columns=("wz", SPEED, "gnss_ve", "gnss_vn"),
     summary="doppler_slip without the roll term (G_y = psi' V; eq 3 without cos(roll))",
     paper="seed 000 (Takikawa et al. 2021)",
+    settings=DopplerSlipSettings,
 )
-def doppler_slip_noroll(drive: Drive, vehicle: Vehicle) -> Estimate:
+def doppler_slip_noroll(drive: Drive, vehicle: Vehicle,
+                        settings: DopplerSlipSettings | None = None) -> Estimate:
     """Seed 000 without roll (the paper's comparison); see the module docstring."""
-    return run_doppler_slip(drive, vehicle, use_roll=False)
+    return run_doppler_slip(drive, vehicle, use_roll=False, settings=settings)
