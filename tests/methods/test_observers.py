@@ -350,5 +350,5 @@ def test_observer_settings_reach_the_method_and_bad_values_say_what_is_expected(
     assert not np.array_equal(slow["beta"], fast["beta"])
     with pytest.raises(InputError, match=r"pole_rad_s = 3.0: expected a number in \[-1000, 0\)"):
         run_method("obs_bicycle", drive, VEH, {"pole_rad_s": 3.0})
-    with pytest.raises(InputError, match="alpha = 0.5: expected 1 ... 20"):
+    with pytest.raises(InputError, match=r"alpha = 0\.5: expected 1 \.\.\. 20"):
         run_method("obs_kinematic", drive, VEH, {"alpha": 0.5})
