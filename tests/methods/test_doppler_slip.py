@@ -458,3 +458,16 @@ def test_health_flags_reversing_and_long_outages_and_is_bounded() -> None:
     fast = drive["ref_vx"] > 6.0
     assert np.median(h[fast]) < 0.5
     assert "flagged_share" in est.params["health"]
+
+
+def test_settings_reach_the_method_and_bad_values_say_what_is_expected() -> None:
+    from sideslip.errors import InputError
+    from sideslip.methods.registry import run_method
+
+    drive = steady_drive(0)
+    vehicle = load_vehicle(VEHICLE)
+    strict = run_method("doppler_slip", drive, vehicle, {"dgy_max_sigma_m_s2": 0.0})
+    assert not strict.params["ay_bias_applied"] and "too uncertain" in strict.params["dGy_note"]
+    assert strict.params["settings"]["dgy_max_sigma_m_s2"] == 0.0
+    with pytest.raises(InputError, match=r"k_min_speed_m_s = 0\.1: expected 0\.5 \.\.\. 50"):
+        run_method("doppler_slip", drive, vehicle, {"k_min_speed_m_s": 0.1})

@@ -97,6 +97,7 @@ class HeadingFit:
             "gyro_scale_sigma": self.gyro_scale_sigma * measured_over_true**2,
             "gyro_scale_correction": self.gyro_scale,
             "gyro_bias_mean_rad_s": float(np.mean(self.knots_bias)),
+            "gyro_bias_rad_s": float(np.mean(self.knots_bias)),
             "heading_samples_used": int(self.used.sum()),
             "heading_samples_rejected": int((~self.used).sum()),
             "heading_residual_std_deg": float(np.degrees(self.residual_std)),

@@ -506,6 +506,9 @@ def run_doppler_slip(drive: Drive, vehicle: Vehicle, use_roll: bool = True,
         K_vehicle_accel=k_vehicle_accel,
         K_used=k_used,
         K_source=k_source,
+        # naming convention (identified value, its 1-sigma): K as used for beta
+        slip_gain_k_s2_m=k_used,
+        slip_gain_k_s2_m_sigma=float(gain.k_std if k_source == "identified" else k_unc),
         slip_correction_applied=k_source != "none",
         slip_correction_note=gain.reason
         + ("; using the vehicle file's K instead" if k_source == "vehicle file" else ""),
