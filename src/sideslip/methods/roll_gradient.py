@@ -53,9 +53,10 @@ MIN_SPAN = 1.5  # m/s^2: span of |a_ym| over the rows used (5th to 95th percenti
 MAX_REL_SIGMA = 0.25
 PLAUSIBLE = (1e-3, 0.04)  # rad per m/s^2
 # wheel-speed and gyro scale errors enter r v_x, so phi_ss carries (s_v + s_r) a_y / g: with
-# typical 0.5 % each (tyre radius; MEMS gyro, datasheet grade) a gradient error of
-SCALE_TERM = float(np.hypot(0.005, 0.005)) / 9.80665  # rad per m/s^2 (7e-4)
-FILE_Z = 2.0  # the file's value is kept unless the drive contradicts it by this many sigma
+# 1 % each (rolling radius with pressure and wear; a MEMS gyro's sensitivity tolerance, +-1-3 %
+# in consumer datasheets) a gradient error of
+SCALE_TERM = float(np.hypot(0.01, 0.01)) / 9.80665  # rad per m/s^2 (1.4e-3)
+FILE_Z = 3.0  # the file's value is kept unless the drive contradicts it by this many sigma
 CORR_S = 1.0  # s
 BLOCK_S = 5.0  # s
 
