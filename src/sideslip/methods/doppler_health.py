@@ -30,8 +30,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from sideslip.filters.consistency import nis_consistency
 from sideslip.frames import wrap_angle
+from sideslip.methods.observer_health import blocked_consistency
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
@@ -84,13 +84,13 @@ def doppler_health(
     nu[r_ok] = wrap_angle(beta_doppler[ok] - beta_model[ok])
     s = sigma_course[ok] ** 2 + beta_std[r_ok] ** 2
     nis[r_ok] = nu[r_ok] ** 2 / np.maximum(s, 1e-12)
-    cons = nis_consistency(t, nis, np.where(np.isfinite(nis), 1, 0), window_s=WINDOW_S)
-    std = beta_std * np.sqrt(cons.inflation)
+    cons_health, inflation, summary = blocked_consistency(
+        t, nis, np.where(np.isfinite(nis), 1.0, 0.0), WINDOW_S, causal=False)
+    std = beta_std * np.sqrt(inflation)
     since = _time_since_fresh(t, r_ok)
     outage = np.clip(0.5 * since / OUTAGE_FULL_S, 0.0, 0.5)
-    health = np.maximum(cons.health, np.where(forward, outage, 0.0))
+    health = np.maximum(cons_health, np.where(forward, outage, 0.0))
     health = np.where(reversing, 1.0, health)
-    summary = cons.summary(t)
     summary.update(
         criterion="windowed NIS of the Doppler sideslip against the slip model (2 s, chi2 99 %)",
         innovations=int(ok.sum()),
