@@ -80,6 +80,16 @@ speed rises again.  The state is clipped to |beta| <= 1.2 rad, |r| <= 5 rad/s; e
 finite on every row.  The gyro is zeroed at standstill (see
 :func:`sideslip.methods.roll_index.standstill_gyro_bias`); the accelerometer is assumed zeroed
 (the paper's assumption) and the IMU at the CG (lever arms are ignored).
+Reversing follows the contract's beta = atan2(v_y, v_x) (about +-pi, as the reference
+``ref_beta`` of the simulator and of the converters), not a forward-equivalent small angle.
+
+Health and settings: every observer outputs ``health`` (0 good ... 1 unusable) and
+``params["health"]`` from what it can check itself -- output error against its model, linear
+range of the tyres, rows where it is not run (below the gate, standstill, reversing) and, for
+the kinematic observer, weak observability at small |r|
+(:mod:`sideslip.methods.observer_health`).  Poles and gains are settings
+(:class:`BicycleObserverSettings`, :class:`KinematicObserverSettings`; ``--set
+obs_modified.pole_rad_s=-15``), fixed by default for the reason given there.
 """
 
 from __future__ import annotations
