@@ -55,7 +55,24 @@ Guards (failure modes of the open ROS implementation, designed out):
   is always in ``slip_correction_note``: never a silent disable.
 * The yaw-rate sign is checked against the GNSS course change (InputError naming ``wz``).
 * ``beta_std`` is an explicit function of the current G_y (sigma_K |G_y| with a 10 % model
-  term and a 0.1 deg floor), so it cannot grow without bound after a turn.
+  term and a 0.1 deg floor), so it cannot grow without bound after a turn; the no-roll
+  variant adds K |a_y,m - psi' V| where the drive has an accelerometer (the gravity term it
+  leaves out).
+* Honest identified parameters (:mod:`sideslip.methods.doppler_stats`): the 1-sigmas of K,
+  the wheel-speed scale and delta G_y are the larger of the t-scaled formal one and a
+  jackknife over 10 s blocks (K, SF) or over curves (delta G_y, with the gyro scale's Schur
+  complement); delta G_y is applied only when that 1-sigma is at most
+  ``DopplerSlipSettings.dgy_max_sigma_m_s2`` (0.15 m/s^2) with enough curves, else 0 and the
+  reason in ``dGy_note`` / ``ay_bias_note``.
+* Self-check (:mod:`sideslip.methods.doppler_health`): the Doppler sideslip at every fresh
+  epoch is the innovation of the slip model; its windowed NIS gives ``health`` and inflates
+  ``beta_std`` where the model stops fitting; a first-order lag of the slip relation in
+  transients (``slip_lag_s``) is identified from the same innovations and applied when it is
+  significant (3 sigma), its uncertainty entering ``beta_std`` otherwise.
+* Params follow the package's naming (``slip_gain_k_s2_m``, ``ay_bias_m_s2``,
+  ``wheel_speed_scale``, ``gyro_scale`` as measured/true, ``gyro_bias_rad_s``, each with
+  ``*_sigma``); the older keys (``K``, ``K_std``, ``dGy_*``, ``wheel_scale_factor`` = eq 4's
+  SF, true/measured) stay.
 
 Low speed: below ``V_KIN`` = 1 m/s the kinematic term uses 1 m/s; at standstill and reversing
 beta is 0 (beta = atan2(v_y, v_x) jumps to +-pi backwards; we report the forward-equivalent 0).
