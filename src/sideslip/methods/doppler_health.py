@@ -18,6 +18,7 @@ multiplied by sqrt(inflation) there (the package's convention).  Rows without fr
 * reversing: the method reports the forward-equivalent 0 there (health 1: not an estimate of
   atan2(v_y, v_x), which is about +-pi);
 * standstill: beta = 0 is exact, health 0;
+* IMU sensor gaps (held samples): :func:`~sideslip.methods.observer_health.stale_health`;
 * GNSS outages longer than ``OUTAGE_FULL_S``: the heading and so the course are dead reckoned,
   health rises linearly to 0.5 at ``OUTAGE_FULL_S`` s without a fresh epoch (the slip relation
   itself does not need GNSS, so never beyond 0.5).
@@ -31,7 +32,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sideslip.frames import wrap_angle
-from sideslip.methods.observer_health import blocked_consistency
+from sideslip.methods.observer_health import blocked_consistency, stale_health
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
@@ -68,6 +69,7 @@ def doppler_health(
     beta_std: FloatArray,
     forward: NDArray[np.bool_],
     reversing: NDArray[np.bool_],
+    imu_fresh: NDArray[np.bool_] | None = None,
 ) -> DopplerHealth:
     """The self-check of the module docstring.
 
@@ -90,6 +92,8 @@ def doppler_health(
     since = _time_since_fresh(t, r_ok)
     outage = np.clip(0.5 * since / OUTAGE_FULL_S, 0.0, 0.5)
     health = np.maximum(cons_health, np.where(forward, outage, 0.0))
+    if imu_fresh is not None:  # held gyro/accelerometer samples (sensor gap)
+        health = np.maximum(health, stale_health(t, imu_fresh))
     health = np.where(reversing, 1.0, health)
     summary.update(
         criterion="windowed NIS of the Doppler sideslip against the slip model (2 s, chi2 99 %)",

@@ -479,6 +479,7 @@ def run_doppler_slip(drive: Drive, vehicle: Vehicle, use_roll: bool = True,
     check = doppler_health(
         t, rows[gate], b_dopp[gate], beta_r[rows][gate] + gain.intercept, samples.sigma[gate],
         beta_std, forward, speed <= -0.1,
+        np.isfinite(drive["wz"]) & (np.isfinite(drive["ay"]) if use_roll else True),
     )
     beta_std = check.beta_std
     params["health"] = check.summary

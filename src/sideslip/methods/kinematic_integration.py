@@ -26,6 +26,7 @@ from numpy.typing import NDArray
 
 from sideslip.drive import Drive
 from sideslip.estimate import Estimate
+from sideslip.methods.observer_health import stale_health
 from sideslip.methods.registry import SPEED, register
 from sideslip.signals import hold, vehicle_speed
 from sideslip.vehicle import Vehicle
@@ -89,6 +90,8 @@ def kinematic_integration(drive: Drive, vehicle: Vehicle,
     vx = vehicle_speed(drive)
     beta = _integrate(drive.t, ay, r, vx, st.v_gate_m_s)
     health = drift_health(drive.t, vx, st.v_gate_m_s)
+    imu = np.isfinite(drive["ay"]) & np.isfinite(drive["wz"])
+    health = np.maximum(health, stale_health(drive.t, imu))  # held samples in a sensor gap
     return Estimate(
         "kinematic_integration",
         drive.t,

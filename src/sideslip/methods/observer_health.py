@@ -23,6 +23,10 @@ windowed-NIS convention of the filters cannot be applied as is.  What they can c
   velocity is unobservable (rank loss, module ``observers``): health rises to ``WEAK`` (0.3)
   as |r| -> 0.
 
+* **sensor gaps** -- rows without a fresh sample of the measured outputs (held values, the
+  observer open loop): health rises to ``STALE`` (0.5) over ``STALE_FULL_S`` s since the last
+  fresh sample (:func:`stale_health`, also used by the other methods of this family).
+
 ``health`` is the largest of these per row; ``params["health"]`` gives the NIS summary and the
 share of rows each reason flagged.
 """
@@ -49,6 +53,8 @@ WEAK = 0.3
 FLOOR = {"r": np.radians(0.1), "ay": 0.05, "vx": 0.05}
 
 
+STALE = 0.5
+STALE_FULL_S = 1.0  # s without a fresh sample at which the gap term reaches STALE
 BLOCK_S = 0.1  # s: NIS summed per block before the windowed test (the chi^2 bound per block)
 
 
@@ -76,6 +82,25 @@ def blocked_consistency(t: FloatArray, nis: FloatArray, dof: FloatArray, window_
     return cons.health[inv], cons.inflation[inv], summary
 
 
+def stale_health(t: FloatArray, fresh: BoolArray, full_s: float = STALE_FULL_S,
+                 level: float = STALE) -> FloatArray:
+    """Per-row gap term: ``level`` x min(1, seconds since the last fresh row / ``full_s``) --
+    but 0 while fresh samples arrive at their normal rate (gaps up to twice the median
+    interval between fresh rows, or 0.1 s)."""
+    n = t.size
+    if n == 0:
+        return np.zeros(0)
+    rows = np.flatnonzero(fresh)
+    if rows.size == 0:
+        return np.full(n, level)
+    last = np.full(n, -1, dtype=np.intp)
+    last[rows] = rows
+    np.maximum.accumulate(last, out=last)
+    since = np.where(last >= 0, t - t[np.maximum(last, 0)], t - t[0] + full_s)
+    normal = max(2.0 * float(np.median(np.diff(t[rows]))) if rows.size > 1 else 0.0, 0.1)
+    return np.asarray(level * np.clip((since - normal) / full_s, 0.0, 1.0), dtype=float)
+
+
 def _robust_scale(x: FloatArray) -> float:
     x = x[np.isfinite(x)]
     if x.size < 10:
@@ -89,12 +114,14 @@ def observer_health(
     residuals: Mapping[str, FloatArray],
     ay_m: FloatArray,
     weak: FloatArray | None = None,
+    inputs_fresh: BoolArray | None = None,
 ) -> tuple[FloatArray, dict[str, object]]:
     """(health per row, params summary) from the checks of the module docstring.
 
     ``observed``: rows where the observer ran; ``residuals``: name (``r``, ``ay``, ``vx``) ->
     per-row output error (NaN where no fresh sample); ``ay_m`` lateral specific force (m/s^2);
-    ``weak``: optional per-row weak-observability share in [0, 1].
+    ``weak``: optional per-row weak-observability share in [0, 1]; ``inputs_fresh``: rows with
+    a fresh sample of the inputs (steering, IMU), for the sensor-gap term.
     """
     n = t.size
     nis = np.zeros(n)
@@ -114,7 +141,14 @@ def observer_health(
     sat = np.clip((np.abs(ay_m) / G - SAT_ON_G) / (SAT_FULL_G - SAT_ON_G), 0.0, 1.0)
     health = np.where(observed, np.maximum(nis_health, sat), NOT_OBSERVED)
     weak_term = np.zeros(n) if weak is None else np.where(observed, WEAK * weak, 0.0)
-    health = np.clip(np.maximum(health, weak_term), 0.0, 1.0)
+    fresh_any = np.zeros(n, dtype=bool)
+    for res in residuals.values():
+        fresh_any |= np.isfinite(res)
+    gap = stale_health(t, fresh_any | ~observed)
+    if inputs_fresh is not None:
+        gap = np.maximum(gap, stale_health(t, inputs_fresh | ~observed))
+    gap = np.where(observed, gap, 0.0)
+    health = np.clip(np.maximum(np.maximum(health, weak_term), gap), 0.0, 1.0)
     summary.update(
         criterion="output error (measured vs predicted outputs) over its drive-wide robust "
         "scale, windowed NIS 2 s trailing, chi2 99 %; saturation; not observed",
@@ -122,5 +156,6 @@ def observer_health(
         saturated_share=float(np.mean(observed & (sat > 0))) if n else 0.0,
         not_observed_share=float(np.mean(~observed)) if n else 0.0,
         weak_observability_share=float(np.mean(weak_term > 0)) if n else 0.0,
+        sensor_gap_share=float(np.mean(gap > 0)) if n else 0.0,
     )
     return np.asarray(health, dtype=float), summary

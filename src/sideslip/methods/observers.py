@@ -413,7 +413,7 @@ def obs_bicycle(drive: Drive, vehicle: Vehicle,
     beta, r_hat = run_bicycle_observer(inp, vehicle, fresh, st.pole_rad_s, st.v_gate_m_s)
     health, summary = observer_health(
         inp.t, _observed(inp, st.v_gate_m_s), {"r": _fresh_residual(inp.r - r_hat, fresh)},
-        inp.ay_m)
+        inp.ay_m, inputs_fresh=_fresh(drive, "steer"))
     return Estimate("obs_bicycle", drive.t,
                     {"beta": beta, "r": r_hat, "gyro_bias": inp.gyro_bias, "health": health},
                     _params(st, summary))
@@ -439,7 +439,8 @@ def obs_kinematic(drive: Drive, vehicle: Vehicle,
     weak = np.clip(1.0 - np.abs(inp.r) / st.r_observable_rad_s, 0.0, 1.0)
     health, summary = observer_health(
         inp.t, _observed(inp, st.v_gate_m_s),
-        {"vx": _fresh_residual(inp.vx - vx, inp.speed_fresh)}, inp.ay_m, weak)
+        {"vx": _fresh_residual(inp.vx - vx, inp.speed_fresh)}, inp.ay_m, weak,
+        inputs_fresh=_fresh(drive, "wz", "ax", "ay"))
     return Estimate(
         "obs_kinematic", drive.t,
         {"beta": beta, "vx": vx, "vy": vy, "r": inp.r, "roll": roll.roll, "bank": roll.bank,
@@ -472,7 +473,7 @@ def _modified(drive: Drive, vehicle: Vehicle, st: BicycleObserverSettings, compe
     health, summary = observer_health(
         inp.t, _observed(inp, st.v_gate_m_s),
         {"r": _fresh_residual(inp.r - r_hat, fresh), "ay": _fresh_residual(res_ay, fresh)},
-        inp.ay_m)
+        inp.ay_m, inputs_fresh=_fresh(drive, "steer"))
     series.update(beta=beta, r=inp.r, gyro_bias=inp.gyro_bias, health=health)
     return series, _params(st, summary, **extra)
 

@@ -71,6 +71,7 @@ from scipy.signal import butter, sosfilt, sosfilt_zi
 
 from sideslip.drive import Drive
 from sideslip.estimate import Estimate
+from sideslip.methods.observer_health import stale_health
 from sideslip.methods.registry import SPEED, register
 from sideslip.methods.roll_gradient import RollGradient, identify_roll_gradient
 from sideslip.models.roll import (
@@ -385,11 +386,20 @@ def _fraction(x: BoolArray) -> float:
     return float(np.mean(x)) if x.size else 0.0
 
 
+def _imu_fresh(drive: Drive) -> BoolArray:
+    ok = np.ones(len(drive), dtype=bool)
+    for name in ("wz", "ay"):
+        if name in drive:
+            ok &= np.isfinite(drive[name])
+    return ok
+
+
 HOLD_FULL_S = 10.0  # s of eq-61 integration from the last static anchor at which health = 0.5
 SLOW_HEALTH = 0.2  # moving below V_MIN: lambda forced to 1, v_y' and Tseng's gains unchecked
 
 
-def roll_index_health(inp: Inputs, est: RollEstimate) -> tuple[FloatArray, dict[str, object]]:
+def roll_index_health(inp: Inputs, est: RollEstimate, imu_fresh: BoolArray | None = None
+                      ) -> tuple[FloatArray, dict[str, object]]:
     """Health of the roll index (0 good ... 1 unusable) from what it checks itself.
 
     0 where the static relation is trusted (lambda = 1, all flags agree); while lambda = 0 the
@@ -405,6 +415,8 @@ def roll_index_health(inp: Inputs, est: RollEstimate) -> tuple[FloatArray, dict[
     rolling = np.abs(inp.vx) >= 0.1
     health = np.where(moving, np.clip(0.5 * since / HOLD_FULL_S, 0.0, 0.5),
                       np.where(rolling, SLOW_HEALTH, 0.0))
+    if imu_fresh is not None:  # held IMU samples (a sensor gap): observer_health.stale_health
+        health = np.maximum(health, stale_health(t, imu_fresh))
     return health, {
         "criterion": f"time since the last static anchor (0.5 at {HOLD_FULL_S:g} s), slow rolling",
         "flagged_share": _fraction(health > 0),
@@ -426,7 +438,7 @@ def roll_index(drive: Drive, vehicle: Vehicle, settings: RollSettings | None = N
     st = settings or RollSettings()
     inp = sensor_inputs(drive)
     est = estimate_roll_index(inp, vehicle, st.identify_roll_gradient, st.roll_cutoff_hz)
-    health, summary = roll_index_health(inp, est)
+    health, summary = roll_index_health(inp, est, _imu_fresh(drive))
     return Estimate(
         "roll_index",
         drive.t,
@@ -465,6 +477,7 @@ def roll_dfc(drive: Drive, vehicle: Vehicle, settings: RollSettings | None = Non
     inp = sensor_inputs(drive)
     roll, bank, w = estimate_roll_dfc(inp, vehicle, st.roll_cutoff_hz)
     health = np.where(np.abs(inp.vx) >= V_MIN, 1.0 - w, 0.0)
+    health = np.maximum(health, stale_health(inp.t, _imu_fresh(drive)))
     return Estimate(
         "roll_dfc",
         drive.t,
