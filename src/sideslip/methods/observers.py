@@ -339,7 +339,11 @@ class BicycleObserverSettings:
     model's, not beta's (eq 36 makes the modified observer's beta error independent of the
     model precisely by letting r_hat absorb the mismatch), so a pole chosen to minimise it
     would be chosen on the wrong criterion; a faster pole follows the sensors' noise, a slower
-    one the model's error, and the drive holds no beta reference to weigh the two.
+    one the model's error, and the drive holds no beta reference to weigh the two.  Measured
+    on the 14 comparison scenarios (seed 0) with poles -8 / -20 / -50 rad/s: the best pole
+    changes from scenario to scenario with no pattern in what a drive measures (sensor noise,
+    speed, a_y), and no fixed choice beats -20 on both files for both observers (mean beta
+    RMSE obs_bicycle 0.327 / 0.234 / 0.324 deg, obs_modified 0.167 / 0.139 / 0.132 deg).
     """
 
     pole_rad_s: float = P_BICYCLE
