@@ -11,16 +11,18 @@ output: the innovation
 (c: the fit's intercept, the constant heading residue; sigma_course = sigma_v / V from the
 receiver) has NIS_k = nu_k^2 / S_k ~ chi^2(1) where the model holds.  The windowed NIS test of
 :func:`sideslip.filters.consistency.nis_consistency` (2 s centred windows: the method is an
-offline smoother) gives the per-row ``health`` and the variance inflation; ``beta_std`` is
-multiplied by sqrt(inflation) there (the package's convention).  Rows without fresh Doppler
+offline smoother) gives the per-row ``health`` and the variance inflation f; there
+``beta_std^2`` becomes ``f beta_std^2 + (f - 1) sigma_course^2`` (the window's mean nu^2 minus
+the course noise: the package's sqrt(f) on beta_std, plus the course noise's share of the
+excess, which matters where sigma_course > beta_std).  Rows without fresh Doppler
 (outages, below the speed gate) keep the model's 1-sigma; their health also reflects
 
 * reversing: the method reports the forward-equivalent 0 there (health 1: not an estimate of
   atan2(v_y, v_x), which is about +-pi);
 * standstill: beta = 0 is exact, health 0;
 * IMU sensor gaps (held samples): :func:`~sideslip.methods.observer_health.stale_health`;
-* GNSS outages longer than ``OUTAGE_FULL_S``: the heading and so the course are dead reckoned,
-  health rises linearly to 0.5 at ``OUTAGE_FULL_S`` s without a fresh epoch (the slip relation
+* GNSS outages: the heading and so the course are dead reckoned, health rises linearly to 0.5
+  at ``OUTAGE_FULL_S`` s without a fresh epoch (beyond the receiver's normal epoch spacing) (the slip relation
   itself does not need GNSS, so never beyond 0.5).
 """
 
@@ -52,14 +54,6 @@ class DopplerHealth:
     summary: dict[str, object]
 
 
-def _time_since_fresh(t: FloatArray, rows: IntArray) -> FloatArray:
-    """Seconds since the latest fresh Doppler epoch at or before each row (inf before any)."""
-    last = np.full(t.size, -1, dtype=np.intp)
-    last[rows] = rows
-    np.maximum.accumulate(last, out=last)
-    return np.where(last >= 0, t - t[np.maximum(last, 0)], np.inf)
-
-
 def doppler_health(
     t: FloatArray,
     rows: IntArray,
@@ -88,9 +82,14 @@ def doppler_health(
     nis[r_ok] = nu[r_ok] ** 2 / np.maximum(s, 1e-12)
     cons_health, inflation, summary = blocked_consistency(
         t, nis, np.where(np.isfinite(nis), 1.0, 0.0), WINDOW_S, causal=False)
-    std = beta_std * np.sqrt(inflation)
-    since = _time_since_fresh(t, r_ok)
-    outage = np.clip(0.5 * since / OUTAGE_FULL_S, 0.0, 0.5)
+    # mean nu^2 = inflation (sigma_c^2 + beta_std^2) in a flagged window, so the model's own
+    # error variance there is inflation beta_std^2 + (inflation - 1) sigma_c^2 (the package's
+    # sqrt(inflation) on beta_std alone would leave out the course noise's share)
+    sc2 = float(np.median(sigma_course[ok] ** 2)) if ok.any() else 0.0
+    std = np.sqrt(beta_std**2 * inflation + (inflation - 1.0) * sc2)
+    fresh = np.zeros(n, dtype=bool)
+    fresh[r_ok] = True
+    outage = stale_health(t, fresh, full_s=OUTAGE_FULL_S, level=0.5)
     health = np.maximum(cons_health, np.where(forward, outage, 0.0))
     if imu_fresh is not None:  # held gyro/accelerometer samples (sensor gap)
         health = np.maximum(health, stale_health(t, imu_fresh))
