@@ -40,6 +40,7 @@ FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
 
 WINDOW_S = 2.0  # s: NIS window (centred)
+NIS_CAP = 16.0  # per-epoch NIS cap (4 sigma): robust to single multipath epochs
 OUTAGE_FULL_S = 60.0  # s without a fresh Doppler epoch at which the outage term reaches 0.5
 
 
@@ -79,7 +80,9 @@ def doppler_health(
     r_ok = rows[ok]
     nu[r_ok] = wrap_angle(beta_doppler[ok] - beta_model[ok])
     s = sigma_course[ok] ** 2 + beta_std[r_ok] ** 2
-    nis[r_ok] = nu[r_ok] ** 2 / np.maximum(s, 1e-12)
+    # one multipath epoch must not flag a window by itself: each epoch's NIS is capped at
+    # NIS_CAP (a 4-sigma innovation), so a window is flagged by a run of large innovations
+    nis[r_ok] = np.minimum(nu[r_ok] ** 2 / np.maximum(s, 1e-12), NIS_CAP)
     cons_health, inflation, summary = blocked_consistency(
         t, nis, np.where(np.isfinite(nis), 1.0, 0.0), WINDOW_S, causal=False)
     # mean nu^2 = inflation (sigma_c^2 + beta_std^2) in a flagged window, so the model's own
