@@ -158,7 +158,7 @@ def soft_car() -> list[str]:
             f"| {metrics(drive, on.series)['roll_rmse_deg']:.2f} / "
             f"{metrics(drive, off.series)['roll_rmse_deg']:.2f} | {cells[0]} | {cells[1]} |")
     lines += ["", "Gradients in rad per m/s^2.  On the right file the file's value is kept "
-              "when the drive agrees with it within 2 sigma.", ""]
+              "when the drive agrees with it within 3 sigma.", ""]
     return lines
 
 
