@@ -55,7 +55,7 @@ FLOOR = {"r": np.radians(0.1), "ay": 0.05, "vx": 0.05}
 
 STALE = 0.5
 STALE_FULL_S = 1.0  # s without a fresh sample at which the gap term reaches STALE
-BLOCK_S = 0.1  # s: NIS summed per block before the windowed test (the chi^2 bound per block)
+BLOCK_S = 0.25  # s: NIS summed per block before the windowed test (the chi^2 bound per block)
 
 
 def blocked_consistency(t: FloatArray, nis: FloatArray, dof: FloatArray, window_s: float,
@@ -63,7 +63,7 @@ def blocked_consistency(t: FloatArray, nis: FloatArray, dof: FloatArray, window_
     """:func:`~sideslip.filters.consistency.nis_consistency` on ``BLOCK_S`` blocks of rows.
 
     Sums of NIS and of degrees of freedom per block are what the windowed test sums anyway, so
-    the result equals the per-row test up to the window edges (one block); the chi^2 bound is
+    the result equals the per-row test up to the window edges (one block, 0.25 s); the chi^2 bound is
     then evaluated per block, not per row (it dominated the observers' run time).  Returns
     per-row (health, inflation) and the summary.
     """
