@@ -14,6 +14,10 @@ The paper's evaluation (Sec. IV, Figs 5-8) on the simulator's four seed 003 scen
   (obs_modified) and mod-bic-w/g (obs_modified_nocomp), plus the open-loop baseline
   kinematic_integration, with the right vehicle file and with cornering stiffness 30 % low.
 Metrics from ``sideslip.evaluate.metrics`` (rows above its 5 m/s speed gate).
+(d) soft car on the step steer and the seed 001 two-turn drive (roll stiffness 40 % of the
+  preset's, estimated with the preset's file): roll with the suspension roll gradient
+  identified from the drive (``sideslip.methods.roll_gradient``) and with the file's value.
+(e) health: mean health and the beta error where it flags (> 0.3) and where it passes (< 0.1).
 Speed: samples per second of each method on a long drive (urban_highway, 670 s at 100 Hz),
 best of 3 after a warm-up run (numba compiled).
 """
@@ -129,6 +133,56 @@ def accuracy(seeds: tuple[int, ...]) -> tuple[list[str], dict[str, dict[str, flo
     return lines, mean
 
 
+def soft_car() -> list[str]:
+    """(d): the roll gradient identified on a soft car against the stiff file's value."""
+    lines = ["### (d) Soft car (roll stiffness 40 % of the file's), seed 0", "",
+             "| scenario | true gradient | file | identified ± 1σ | source | roll_index RMSE "
+             "identified / file value | obs_modified beta | obs_kinematic beta |",
+             "|---|---|---|---|---|---|---|---|"]
+    methods = all_methods()
+    for sc in ("step_steer", "two_turns_gyro_sf"):
+        preset = load_vehicle(simulate(sc, seed=0, duration_s=1.0).meta["vehicle"])
+        soft = preset.with_changes(roll_stiffness=0.4 * preset.roll_stiffness)
+        drive = simulate(sc, seed=0, vehicle=soft)
+        on = run_method(methods["roll_index"], drive, preset)
+        off = run_method(methods["roll_index"], drive, preset, {"identify_roll_gradient": False})
+        p = on.params
+        cells = []
+        for m in ("obs_modified", "obs_kinematic"):
+            met = metrics(drive, run_method(methods[m], drive, preset).series)
+            cells.append(f"{met['beta_rmse_deg']:.3f}")
+        lines.append(
+            f"| {sc} | {soft.static_roll_gain:.4f} | {preset.static_roll_gain:.4f} "
+            f"| {p['roll_gradient_identified_rad_per_m_s2']:.4f} ± "
+            f"{p['roll_gradient_identified_sigma']:.4f} | {p['roll_gradient_source']} "
+            f"| {metrics(drive, on.series)['roll_rmse_deg']:.2f} / "
+            f"{metrics(drive, off.series)['roll_rmse_deg']:.2f} | {cells[0]} | {cells[1]} |")
+    lines += ["", "Gradients in rad per m/s^2.  On the right file the file's value is kept "
+              "when the drive agrees with it within 3 sigma.", ""]
+    return lines
+
+
+def health_table() -> list[str]:
+    """(e): does the health flag the rows with large errors?"""
+    methods = all_methods()
+    lines = ["### (e) Health: mean, and mean |beta error| (deg) where health > 0.3 / < 0.1, seed 0",
+             "", f"| scenario | {' | '.join(OBSERVERS[:4])} |", "|---|" + "---|" * 4]
+    for sc in SCENARIOS:
+        drive = simulate(sc, seed=0)
+        veh = load_vehicle(drive.meta["vehicle"])
+        mv = drive["ref_vx"] > 5.0
+        cells = []
+        for m in OBSERVERS[:4]:
+            est = run_method(methods[m], drive, veh)
+            h, err = est["health"], np.degrees(np.abs(est["beta"] - drive["ref_beta"]))
+            bad, good = mv & (h > 0.3), mv & (h < 0.1)
+            eb = f"{err[bad].mean():.3f}" if bad.any() else "-"
+            eg = f"{err[good].mean():.3f}" if good.any() else "-"
+            cells.append(f"{h[mv].mean():.2f}: {eb} / {eg}")
+        lines.append(f"| {sc} | {' | '.join(cells)} |")
+    return [*lines, ""]
+
+
 def speed(repeats: int = 3) -> list[str]:
     drive = simulate(SPEED_DRIVE, seed=0)
     veh = load_vehicle(drive.meta["vehicle"])
@@ -184,7 +238,7 @@ def main() -> None:
         "radii, 0.1 deg steering offset).  Errors above the 5 m/s evaluation gate.", "",
         "Ranking of the four observers by mean beta RMSE (best first): "
         + "; ".join(f"{sc}: {', '.join(order[sc])}" for sc in SCENARIOS) + ".", "",
-        *findings, *acc, "", "## Speed", "", *spd, "",
+        *findings, *acc, "", *soft_car(), *health_table(), "## Speed", "", *spd, "",
     ]
     OUT.parent.mkdir(parents=True, exist_ok=True)
     OUT.write_text("\n".join(text))

@@ -155,7 +155,7 @@ def test_roll_methods_finite_and_sane_on_an_urban_drive_with_standstill() -> Non
     drive = sim_drive("urban_course")
     for m in ("roll_index", "roll_dfc"):
         est = run(m, drive)
-        assert set(est.series) == {"roll", "bank", "gyro_bias"}
+        assert set(est.series) == {"roll", "bank", "gyro_bias", "health"}
         assert rmse_deg(est["roll"] - drive["ref_roll"]) < 2.0, m
 
 

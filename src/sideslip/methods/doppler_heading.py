@@ -53,6 +53,7 @@ KNOT_SPACING_S = 60.0  # s between gyro-offset knots
 BIAS_RW = 1.0e-4  # rad/s change of the offset per knot interval, 1-sigma (MEMS drift)
 BIAS_PRIOR = 0.05  # rad/s, 1-sigma prior on the offset level (about 3 deg/s)
 SCALE_PRIOR = 0.02  # 1-sigma prior on the gyro scale correction s
+HEADING_CORR_S = 1.0  # s: one independent course residual per this time (for the 1-sigma of s)
 
 
 @dataclass(frozen=True)
@@ -85,11 +86,18 @@ class HeadingFit:
     good: NDArray[np.bool_]
     residual_std: float
     iterations: int
+    gyro_scale_sigma: float = float("inf")
 
     def params(self) -> dict[str, float | int]:
+        # naming convention: scale factors as measured/true; ``gyro_scale_correction`` is the
+        # multiplier applied to the raw gyro (true/measured)
+        measured_over_true = 1.0 / self.gyro_scale
         return {
-            "gyro_scale": self.gyro_scale,
+            "gyro_scale": measured_over_true,
+            "gyro_scale_sigma": self.gyro_scale_sigma * measured_over_true**2,
+            "gyro_scale_correction": self.gyro_scale,
             "gyro_bias_mean_rad_s": float(np.mean(self.knots_bias)),
+            "gyro_bias_rad_s": float(np.mean(self.knots_bias)),
             "heading_samples_used": int(self.used.sum()),
             "heading_samples_rejected": int((~self.used).sum()),
             "heading_residual_std_deg": float(np.degrees(self.residual_std)),
@@ -292,6 +300,19 @@ def fit_heading(
         used = new_used
     psi0, s = float(x[0]), float(x[1])
     kb = x[2:]
+    # 1-sigma of s: the normal matrix's inverse, scaled by the kept residuals' excess over
+    # their assumed sigma and by sqrt(epochs per HEADING_CORR_S) for their correlation
+    s_sigma = float("inf")
+    if rows.size and used.sum() > 3:
+        try:
+            cov_ss = float(np.linalg.inv(N)[1, 1])
+        except np.linalg.LinAlgError:
+            cov_ss = float("inf")
+        z = (wrap_angle(y - (A_c @ x + i_meas)) / sig)[used]
+        excess = max(float(np.mean(z * z)), 1.0)
+        span = max(float(t[rows[-1]] - t[rows[0]]), 1e-6)
+        corr = max(float(used.sum()) / span * HEADING_CORR_S, 1.0)
+        s_sigma = float(np.sqrt(max(cov_ss, 0.0) * excess * corr))
     yaw = psi0 + (1.0 + s) * integ - _bias_integral_rows(t, knots, kb)
     bias = np.interp(t, knots, kb)
     y_all = samples.course - (course_offset if course_offset is not None else 0.0)
@@ -310,4 +331,5 @@ def fit_heading(
         good=good,
         residual_std=resid_std,
         iterations=iterations,
+        gyro_scale_sigma=s_sigma,
     )

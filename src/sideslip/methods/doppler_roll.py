@@ -65,6 +65,7 @@ from numpy.typing import NDArray
 
 from sideslip.frames import wrap_angle
 from sideslip.methods.doppler_heading import CourseSamples
+from sideslip.methods.doppler_stats import t_factor
 from sideslip.models.dead_reckoning import _cumtrapz
 from sideslip.vehicle import G
 
@@ -90,6 +91,25 @@ def _weighted_median(values: FloatArray, weights: FloatArray) -> float:
     order = np.argsort(values)
     cw = np.cumsum(weights[order])
     return float(values[order][np.searchsorted(cw, 0.5 * cw[-1])])
+
+
+def _two_parameter_std(
+    slopes: FloatArray, turns: FloatArray, sigma: float, with_scale: bool
+) -> float:
+    """Formal 1-sigma of delta G_y (m/s^2) from the closures' scatter ``sigma`` (rad).
+
+    Linearised at the joint value each closure is ``slope_c delta + s turn_c``; with the gyro
+    scale s solved alongside, delta's variance is sigma^2 over the Schur complement
+    ``sum slope^2 - (sum slope turn)^2 / sum turn^2`` (not over sum slope^2 alone, which would
+    ignore how much the scale can mimic delta G_y -- all curves of one direction make the two
+    inseparable).
+    """
+    info = float(np.sum(slopes**2))
+    if with_scale:
+        tt = float(np.sum(turns**2))
+        if tt > 0:
+            info -= float(np.sum(slopes * turns)) ** 2 / tt
+    return float(sigma / np.sqrt(info)) if info > 1e-300 else np.inf
 
 
 def moving_average(x: FloatArray, width: int) -> FloatArray:
@@ -153,9 +173,20 @@ class AyBiasScan:
     n_curves: int = 0
     combine: str = "joint"
     reason: str = ""
+    formal_std: float = float("inf")
+    jackknife_std: float = float("inf")
 
     def params(self) -> dict[str, object]:
+        applied = self.reason == ""
         return {
+            # naming convention: the bias (measured - true) with its 1-sigma; the value is the
+            # joint fit's even when it was not applied (then ay_bias_applied is False)
+            "ay_bias_m_s2": self.ay_bias_joint if np.isfinite(self.ay_bias_joint) else 0.0,
+            "ay_bias_m_s2_sigma": self.ay_bias_std,
+            "ay_bias_applied": applied,
+            "ay_bias_note": self.reason,
+            "dGy_formal_std_mps2": self.formal_std,
+            "dGy_jackknife_std_mps2": self.jackknife_std,
             "dGy_mps2": -self.ay_bias,
             "ay_bias_mps2": self.ay_bias,
             "dGy_mean_mps2": -self.ay_bias_mean,
@@ -262,6 +293,7 @@ def scan_ay_bias(
     step: float = SCAN_STEP,
     fit_scale: bool = True,
     max_std: float = DGY_MAX_STD,
+    min_curves: int = MIN_CURVES,
 ) -> AyBiasScan:
     """Scan eq 19 over delta G_y for every curve window; see the module docstring.
 
@@ -315,6 +347,30 @@ def scan_ay_bias(
         dof = max(int(mask.sum()) - (2 if use_scale else 1), 1)
         return max(float(np.sqrt(np.sum(r * r) / dof)), CLOSURE_FLOOR)
 
+    def refine(mask: NDArray[np.bool_], j: int, sc: FloatArray) -> float:
+        """Grid minimum ``j`` refined by a parabola through the summed costs, m/s^2."""
+        cost = np.sum((closure[mask] - sc * turned[mask]) ** 2, axis=0)
+        value = float(grid[j])
+        if 0 < j < grid.size - 1:
+            den = cost[j - 1] - 2.0 * cost[j] + cost[j + 1]
+            if den > 0:
+                value += float(np.clip(0.5 * (cost[j - 1] - cost[j + 1]) / den, -1.0, 1.0) * step)
+        return value
+
+    def jackknife_std(mask: NDArray[np.bool_]) -> float:
+        """Delete-one-curve jackknife 1-sigma of the joint value (Efron & Tibshirani 1993,
+        ch. 11): the spread across curves, whatever the closures' error model."""
+        idx = np.flatnonzero(mask)
+        if idx.size < 4:
+            return np.inf
+        vals = np.empty(idx.size)
+        for m, c in enumerate(idx):
+            sub = mask.copy()
+            sub[c] = False
+            j, sc = solve(sub)
+            vals[m] = refine(sub, j, sc)
+        return float(np.sqrt((idx.size - 1) / idx.size * np.sum((vals - vals.mean()) ** 2)))
+
     # outlier curves (a multipath end, a transient): externally studentised residuals -- each
     # curve's closure against the fit of the others, over the others' scatter; the worst goes
     # while above 4 (least squares alone would spread one bad curve over all)
@@ -336,15 +392,11 @@ def scan_ay_bias(
     C = (closure - scale[joint] * turned) ** 2
     j0, j1 = max(joint - 1, 0), min(joint + 1, grid.size - 1)
     slopes = (turned[:, j1] - turned[:, j0]) / max(grid[j1] - grid[j0], step)
-    joint_cost = np.sum((closure[active] - scale * turned[active]) ** 2, axis=0)
-    joint_v = float(grid[joint])
-    if 0 < joint < grid.size - 1:
-        den = joint_cost[joint - 1] - 2.0 * joint_cost[joint] + joint_cost[joint + 1]
-        if den > 0:
-            joint_v += float(np.clip(0.5 * (joint_cost[joint - 1] - joint_cost[joint + 1]) / den,
-                                     -1.0, 1.0) * step)
-    info = float(np.sum(slopes[active] ** 2))
-    joint_std = sigma_cl / np.sqrt(info) if info > 0 else np.inf
+    joint_v = refine(active, joint, scale)
+    formal_std = _two_parameter_std(slopes[active], turned[active, joint], sigma_cl, use_scale)
+    jack_std = jackknife_std(active)
+    dof = max(int(active.sum()) - (2 if use_scale else 1), 1)
+    joint_std = max(formal_std * t_factor(dof), jack_std)
     picks: list[float] = []
     weights: list[float] = []
     for c, slope in zip(C, slopes, strict=True):
@@ -368,8 +420,8 @@ def scan_ay_bias(
     chosen = {"weighted_median": wmedian, "median": median, "mean": mean, "joint": joint_v}[combine]
     std = joint_std
     reason = ""
-    if active.sum() < MIN_CURVES:
-        reason = (f"only {int(active.sum())} usable curves (at least {MIN_CURVES} needed to solve "
+    if active.sum() < min_curves:
+        reason = (f"only {int(active.sum())} usable curves (at least {min_curves} needed to solve "
                   "delta G_y with the gyro scale): set to 0")
         chosen = 0.0
     elif not np.isfinite(std) or std > max_std:
@@ -381,5 +433,6 @@ def scan_ay_bias(
         ay_bias=-chosen, ay_bias_mean=-mean, ay_bias_median=-median, ay_bias_wmedian=-wmedian,
         ay_bias_joint=-joint_v, ay_bias_std=float(std), per_curve=[-v for v in picks],
         weights=[float(x) for x in wts / wts.sum()], n_curves=int(active.sum()),
-        combine=combine, reason=reason,
+        combine=combine, reason=reason, formal_std=formal_std * t_factor(dof),
+        jackknife_std=jack_std,
     )

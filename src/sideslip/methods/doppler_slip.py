@@ -55,7 +55,24 @@ Guards (failure modes of the open ROS implementation, designed out):
   is always in ``slip_correction_note``: never a silent disable.
 * The yaw-rate sign is checked against the GNSS course change (InputError naming ``wz``).
 * ``beta_std`` is an explicit function of the current G_y (sigma_K |G_y| with a 10 % model
-  term and a 0.1 deg floor), so it cannot grow without bound after a turn.
+  term and a 0.1 deg floor), so it cannot grow without bound after a turn; the no-roll
+  variant adds K |a_y,m - psi' V| where the drive has an accelerometer (the gravity term it
+  leaves out).
+* Honest identified parameters (:mod:`sideslip.methods.doppler_stats`): the 1-sigmas of K,
+  the wheel-speed scale and delta G_y are the larger of the t-scaled formal one and a
+  jackknife over 10 s blocks (K, SF) or over curves (delta G_y, with the gyro scale's Schur
+  complement); delta G_y is applied only when that 1-sigma is at most
+  ``DopplerSlipSettings.dgy_max_sigma_m_s2`` (0.15 m/s^2) with enough curves, else 0 and the
+  reason in ``dGy_note`` / ``ay_bias_note``.
+* Self-check (:mod:`sideslip.methods.doppler_health`): the Doppler sideslip at every fresh
+  epoch is the innovation of the slip model; its windowed NIS gives ``health`` and inflates
+  ``beta_std`` where the model stops fitting; a first-order lag of the slip relation in
+  transients (``slip_lag_s``) is identified from the same innovations and applied when it is
+  significant (3 sigma), its uncertainty entering ``beta_std`` otherwise.
+* Params follow the package's naming (``slip_gain_k_s2_m``, ``ay_bias_m_s2``,
+  ``wheel_speed_scale``, ``gyro_scale`` as measured/true, ``gyro_bias_rad_s``, each with
+  ``*_sigma``); the older keys (``K``, ``K_std``, ``dGy_*``, ``wheel_scale_factor`` = eq 4's
+  SF, true/measured) stay.
 
 Low speed: below ``V_KIN`` = 1 m/s the kinematic term uses 1 m/s; at standstill and reversing
 beta is 0 (beta = atan2(v_y, v_x) jumps to +-pi backwards; we report the forward-equivalent 0).
@@ -96,13 +113,23 @@ from sideslip.methods.doppler_heading import (
     course_samples,
     fit_heading,
 )
+from sideslip.methods.doppler_health import (
+    LAG_MAX_S,
+    LAG_MIN_Z,
+    SlipLag,
+    doppler_health,
+    fit_slip_lag,
+)
 from sideslip.methods.doppler_roll import (
+    DGY_MAX_STD,
+    MIN_CURVES,
     AyBiasScan,
     curve_windows,
     moving_average,
     roll_from_lateral,
     scan_ay_bias,
 )
+from sideslip.methods.doppler_stats import block_jackknife_std, honest_std, time_blocks
 from sideslip.methods.registry import SPEED, register
 from sideslip.models.dead_reckoning import dead_reckon, horizontal_speed, horizontal_yaw_rate
 from sideslip.signals import hold, speed_raw, vehicle_speed
@@ -111,19 +138,47 @@ from sideslip.vehicle import G, Vehicle
 FloatArray = NDArray[np.float64]
 
 K_MAX = 0.03  # s^2/m: beyond any road car (passenger cars 0.002-0.015)
-K_MIN_SPEED = 5.0  # m/s: speed gate of the K samples (Doppler course noise sigma_v / V)
+K_MIN_SPEED = 5.0  # m/s: default speed gate of the K samples (Doppler course noise sigma_v/V)
 K_MIN_GY = 0.5  # m/s^2: "in curves"
 K_MIN_SAMPLES = 50
 K_MIN_GY_SPAN = 1.0  # m/s^2: the G_y values must span at least this much
 K_CORR_S = 1.0  # s: one independent K sample per this time
+K_BLOCK_S = 10.0  # s: jackknife blocks of the K samples (longer than a curve's model error)
 HEADING_MAX_GY = 1.0  # m/s^2: heading fit only where the sideslip is small
 SMOOTH_S = 0.5  # s: centred moving average of a_y,m and psi' V (roll, G_y)
 V_KIN = 1.0  # m/s: floor of V in the kinematic term l_r r / V
 BETA_FLOOR = np.radians(0.1)  # rad: floor of beta_std
 SF_BOUNDS = (0.8, 1.25)
+SF_MODEL_SIGMA = 1e-3  # -: longitudinal tyre slip / rolling-radius term of the SF 1-sigma
 N_PASSES = 3
 SCAN_KNOT_S = 600.0  # s: offset knots of the stiff heading fit behind the delta G_y scan
 SCAN_BIAS_RW = 3.0e-4  # rad/s per SCAN_KNOT_S, 1-sigma
+
+
+@dataclass(frozen=True)
+class DopplerSlipSettings:
+    """Tuning of ``doppler_slip`` and ``doppler_slip_noroll`` (defaults: module docstring).
+
+    ``k_min_speed_m_s``: speed gate of the eq-20 samples (m/s); ``dgy_max_sigma_m_s2``: the
+    honest 1-sigma of delta G_y (m/s^2) above which it is not applied; ``dgy_min_curves``:
+    curve windows needed for delta G_y; ``slip_lag``: identify and apply the transient lag of
+    the slip relation (doppler_health); ``slip_lag_min_z``: its significance, in sigma.
+    """
+
+    k_min_speed_m_s: float = K_MIN_SPEED
+    dgy_max_sigma_m_s2: float = DGY_MAX_STD
+    dgy_min_curves: int = MIN_CURVES
+    slip_lag: bool = True
+    slip_lag_min_z: float = LAG_MIN_Z
+
+    def __post_init__(self) -> None:
+        checks = (("k_min_speed_m_s", self.k_min_speed_m_s, 0.5, 50.0),
+                  ("dgy_max_sigma_m_s2", self.dgy_max_sigma_m_s2, 0.0, 5.0),
+                  ("dgy_min_curves", self.dgy_min_curves, 3, 1000),
+                  ("slip_lag_min_z", self.slip_lag_min_z, 0.0, 100.0))  # fmt: skip
+        for name, value, lo, hi in checks:
+            if not (np.isfinite(value) and lo <= value <= hi):
+                raise ValueError(f"DopplerSlipSettings.{name} = {value}: expected {lo:g} ... {hi:g}")
 
 
 @dataclass(frozen=True)
@@ -139,14 +194,19 @@ class SlipGain:
     residual_std: float
 
 
-def fit_slip_gain(gy: FloatArray, beta_r: FloatArray, per_second: float) -> SlipGain:
+def fit_slip_gain(
+    gy: FloatArray, beta_r: FloatArray, per_second: float, t: FloatArray | None = None
+) -> SlipGain:
     """Eq 20: least-squares slope of beta_r,Doppler (rad) on G_y (m/s^2), with guards.
 
     ``per_second``: samples per second (for the correlation inflation of the 1-sigma).
+    ``t``: the samples' times (s); when given, the 1-sigma is also the block jackknife's over
+    ``K_BLOCK_S`` blocks (:mod:`sideslip.methods.doppler_stats`), whichever is larger.
     Returns ``applied = False`` with the reason when the data cannot support K.
     """
     ok = np.isfinite(gy) & np.isfinite(beta_r)
     x, y = gy[ok], beta_r[ok]
+    ts = t[ok] if t is not None else None
     if x.size < K_MIN_SAMPLES:
         return SlipGain(0.0, np.inf, 0.0, int(x.size), False,
                         f"too few curve samples ({x.size} < {K_MIN_SAMPLES}): "
@@ -171,6 +231,17 @@ def fit_slip_gain(gy: FloatArray, beta_r: FloatArray, per_second: float) -> Slip
     inflate = np.sqrt(max(per_second * K_CORR_S, 1.0))
     k_std = float(res_std / np.sqrt(sxx) * inflate) if sxx > 0 else np.inf
     n = int(keep.sum())
+    if ts is not None and np.isfinite(k_std):
+        xk, yk = x[keep], y[keep]
+        labels = time_blocks(ts[keep], K_BLOCK_S)
+
+        def slope(mask: NDArray[np.bool_]) -> float:
+            xm, ym = xk[mask], yk[mask]
+            d = float(np.sum((xm - xm.mean()) ** 2))
+            return -float(np.sum((xm - xm.mean()) * (ym - ym.mean())) / d) if d > 0 else np.nan
+
+        n_blocks = int(np.unique(labels).size)
+        k_std = honest_std(k_std, max(n_blocks - 2, 1), block_jackknife_std(labels, slope))
     reason = ""
     if span < K_MIN_GY_SPAN:
         reason = f"G_y of the curve samples spans {span:.2f} m/s^2 < {K_MIN_GY_SPAN}"
@@ -184,15 +255,21 @@ def fit_slip_gain(gy: FloatArray, beta_r: FloatArray, per_second: float) -> Slip
 
 
 def wheel_scale_factor(
-    v_gnss: FloatArray, v_wheel: FloatArray
-) -> tuple[float, str]:
-    """Eq 4's SF (true over measured): least squares of GNSS speed on wheel speed, outliers out."""
+    v_gnss: FloatArray, v_wheel: FloatArray, t: FloatArray | None = None
+) -> tuple[float, float, str]:
+    """Eq 4's SF (true over measured): least squares of GNSS speed on wheel speed, outliers out.
+
+    Returns (SF, its 1-sigma, note).  The 1-sigma is the larger of the formal one (t-scaled,
+    one independent sample per ``K_CORR_S``) and the block jackknife's over ``K_BLOCK_S``
+    blocks of the samples' times ``t`` (s; inf when ``t`` is not given and too few samples).
+    """
     ok = np.isfinite(v_gnss) & np.isfinite(v_wheel) & (v_wheel > HEADING_MIN_SPEED)
     x, y = v_wheel[ok], v_gnss[ok]
     if x.size < 20:
-        return 1.0, "too few moving GNSS samples: SF = 1"
+        return 1.0, float("inf"), "too few moving GNSS samples: SF = 1"
     keep = np.ones(x.size, dtype=bool)
     sf = 1.0
+    s = 1e-3
     for _ in range(6):
         sf = float(np.sum(x[keep] * y[keep]) / np.sum(x[keep] ** 2))
         res = y - sf * x
@@ -201,9 +278,27 @@ def wheel_scale_factor(
         if new.sum() < 20 or np.array_equal(new, keep):
             break
         keep = new
+    sigma = float("inf")
+    if t is not None:
+        tk = t[ok][keep]
+        xk, yk = x[keep], y[keep]
+        span = max(float(tk[-1] - tk[0]), 1e-6)
+        corr = max(keep.sum() / span * K_CORR_S, 1.0)
+        formal = max(s, 1e-3) / float(np.sqrt(np.sum(xk**2))) * float(np.sqrt(corr))
+        labels = time_blocks(tk, K_BLOCK_S)
+
+        def fit(mask: NDArray[np.bool_]) -> float:
+            return float(np.sum(xk[mask] * yk[mask]) / np.sum(xk[mask] ** 2))
+
+        n_blocks = int(np.unique(labels).size)
+        sigma = honest_std(formal, max(n_blocks - 1, 1), block_jackknife_std(labels, fit))
+        # GNSS speed and rolling speed also differ by the driven tyres' longitudinal slip and
+        # the radius' growth with speed (0.1-0.3 % for road cars, Gillespie 1992 ch. 2): a
+        # model term the residuals cannot show, since it moves every sample alike
+        sigma = float(np.hypot(sigma, SF_MODEL_SIGMA))
     if not SF_BOUNDS[0] <= sf <= SF_BOUNDS[1]:
-        return 1.0, f"fitted SF = {sf:.3f} implausible: SF = 1"
-    return sf, ""
+        return 1.0, float("inf"), f"fitted SF = {sf:.3f} implausible: SF = 1"
+    return sf, sigma, ""
 
 
 def _pitch(drive: Drive, speed: FloatArray, width: int) -> tuple[FloatArray, str]:
@@ -236,8 +331,10 @@ def _antenna_offset(
     return np.asarray(((arm[0] + lr) * r - arm[2] * wx) / v, dtype=float)
 
 
-def run_doppler_slip(drive: Drive, vehicle: Vehicle, use_roll: bool = True) -> Estimate:
+def run_doppler_slip(drive: Drive, vehicle: Vehicle, use_roll: bool = True,
+                     settings: DopplerSlipSettings | None = None) -> Estimate:
     """The full pipeline of the module docstring; ``use_roll=False`` is the no-roll variant."""
+    st = settings or DopplerSlipSettings()
     t = drive.t
     n = t.size
     dt = drive.dt_median if n > 1 else 0.01
@@ -260,13 +357,17 @@ def run_doppler_slip(drive: Drive, vehicle: Vehicle, use_roll: bool = True) -> E
     params["yaw_rate_course_correlation"] = check_yaw_rate_sign(t, wz, samples, drive.path)
     raw = speed_raw(drive)
     sf_reason = "no GNSS Doppler: SF = 1"
-    sf = 1.0
+    sf, sf_sigma = 1.0, float("inf")
     if raw is not None and samples.rows.size:
         v_w = hold(raw, t)[0][samples.rows]
-        sf, sf_reason = wheel_scale_factor(samples.speed, np.abs(v_w))
+        sf, sf_sigma, sf_reason = wheel_scale_factor(samples.speed, np.abs(v_w), t[samples.rows])
     pitch, pitch_src = _pitch(drive, speed, width)
     v_h = horizontal_speed(speed, sf, pitch)
-    params.update(wheel_scale_factor=sf, wheel_scale_factor_note=sf_reason, pitch_source=pitch_src)
+    params.update(
+        wheel_scale_factor=sf, wheel_scale_factor_note=sf_reason, pitch_source=pitch_src,
+        # naming convention (measured/true): the inverse of eq 4's SF
+        wheel_speed_scale=1.0 / sf, wheel_speed_scale_sigma=sf_sigma / sf**2,
+    )
 
     # --- iterate: heading -> ay bias and roll -> slip gain -> heading ...------------------------
     still_rows = np.flatnonzero(still)
@@ -298,7 +399,8 @@ def run_doppler_slip(drive: Drive, vehicle: Vehicle, use_roll: bool = True) -> E
             transient = moving_average(
                 np.gradient(r_s * arm_ay + v_h * beta_r_model, t), width
             )
-            scan = scan_ay_bias(t, rate_c, ay_s, r_s * v_h + transient, windows)
+            scan = scan_ay_bias(t, rate_c, ay_s, r_s * v_h + transient, windows,
+                                max_std=st.dgy_max_sigma_m_s2, min_curves=st.dgy_min_curves)
             roll = roll_from_lateral(ay_s, r_s, v_h, scan.ay_bias, transient)
             roll_raw = roll_from_lateral(ay_s, r_s, v_h, 0.0, transient)
             rate_h = horizontal_yaw_rate(wz, 0.0, roll, pitch)
@@ -311,10 +413,10 @@ def run_doppler_slip(drive: Drive, vehicle: Vehicle, use_roll: bool = True) -> E
         beta_d = wrap_angle(samples.course - fit.yaw[rows]) - _antenna_offset(
             r_corr, wx, v_h, lr, arm3
         )[rows]
-        sel = (samples.speed > K_MIN_SPEED) & (np.abs(gy[rows]) > K_MIN_GY) & (
+        sel = (samples.speed > st.k_min_speed_m_s) & (np.abs(gy[rows]) > K_MIN_GY) & (
             np.abs(r_s[rows]) < 1.0
         )
-        gain = fit_slip_gain(gy[rows][sel], beta_d[sel], rate_gnss)
+        gain = fit_slip_gain(gy[rows][sel], beta_d[sel], rate_gnss, t[rows][sel])
         beta_r_model = -gain.k * gy
 
     if fit is None:  # pragma: no cover - N_PASSES >= 1
@@ -351,6 +453,36 @@ def run_doppler_slip(drive: Drive, vehicle: Vehicle, use_roll: bool = True) -> E
     else:
         k_unc = k_vehicle if np.isfinite(k_vehicle) else 0.01
     beta_std = np.hypot(k_unc * np.abs(gy), BETA_FLOOR)
+    if not use_roll and "ay" in drive:
+        # the no-roll relation leaves out g sin(roll) (bank, body roll); where the drive has an
+        # accelerometer the size of what it leaves out is known: K |a_y,m - psi' V|
+        ay_chk = moving_average(hold(drive["ay"], t)[0], width)
+        beta_std = np.hypot(beta_std, k_used * np.abs(ay_chk - gy))
+    # self-check against the Doppler sideslip (doppler_health): transient lag, inflation, health
+    gate = samples.speed > st.k_min_speed_m_s
+    b_dopp = wrap_angle(samples.course - fit.yaw[rows]) - _antenna_offset(
+        r_corr, wx, v_h, lr, arm3
+    )[rows]
+    rate_term = k_used * moving_average(np.gradient(gy, t) if n > 1 else np.zeros(n), width)
+    lag = fit_slip_lag(t[rows][gate], rate_term[rows][gate],
+                       wrap_angle(b_dopp - beta_r[rows] - gain.intercept)[gate], st.slip_lag_min_z)
+    if not st.slip_lag and lag.applied:
+        lag = SlipLag(lag.tau_s, lag.tau_s_sigma, False, "slip lag switched off (settings)")
+    params.update(lag.params())
+    if lag.applied:
+        beta_r = np.where(forward, beta_r + lag.tau_s * rate_term, 0.0)
+        beta = np.clip(np.where(forward, beta + lag.tau_s * rate_term, 0.0), -0.5, 0.5)
+        beta_std = np.hypot(beta_std, lag.tau_s_sigma * np.abs(rate_term))
+    else:  # the unmodelled lag is an error of up to hypot(max(tau, 0), sigma_tau) K dG_y/dt
+        lag_unc = min(float(np.hypot(max(lag.tau_s, 0.0), lag.tau_s_sigma)), LAG_MAX_S)
+        beta_std = np.hypot(beta_std, lag_unc * np.abs(rate_term))
+    check = doppler_health(
+        t, rows[gate], b_dopp[gate], beta_r[rows][gate] + gain.intercept, samples.sigma[gate],
+        beta_std, forward, speed <= -0.1,
+        np.isfinite(drive["wz"]) & (np.isfinite(drive["ay"]) if use_roll else True),
+    )
+    beta_std = check.beta_std
+    params["health"] = check.summary
 
     # --- dead reckoning (eqs 1-4) from the first GNSS fix ---------------------------------------
     yaw = fit.yaw
@@ -375,6 +507,7 @@ def run_doppler_slip(drive: Drive, vehicle: Vehicle, use_roll: bool = True) -> E
         "e_noslip": e_ns,
         "n_noslip": n_ns,
         "gyro_bias": fit.gyro_bias,
+        "health": check.health,
     }
     if use_roll:
         series["roll"] = roll
@@ -391,6 +524,9 @@ def run_doppler_slip(drive: Drive, vehicle: Vehicle, use_roll: bool = True) -> E
         K_vehicle_accel=k_vehicle_accel,
         K_used=k_used,
         K_source=k_source,
+        # naming convention (identified value, its 1-sigma): K as used for beta
+        slip_gain_k_s2_m=k_used,
+        slip_gain_k_s2_m_sigma=float(gain.k_std if k_source == "identified" else k_unc),
         slip_correction_applied=k_source != "none",
         slip_correction_note=gain.reason
         + ("; using the vehicle file's K instead" if k_source == "vehicle file" else ""),
@@ -398,7 +534,9 @@ def run_doppler_slip(drive: Drive, vehicle: Vehicle, use_roll: bool = True) -> E
     )
     for key, value in series.items():
         series[key] = np.nan_to_num(np.asarray(value, dtype=float), nan=0.0, posinf=0.0, neginf=0.0)
-    return Estimate("doppler_slip" if use_roll else "doppler_slip_noroll", t, series, params)
+    innovations = {"doppler_sideslip": check.innovation, "doppler_sideslip_nis": check.nis}
+    return Estimate("doppler_slip" if use_roll else "doppler_slip_noroll", t, series, params,
+                    innovations)
 
 
 @register(
@@ -407,10 +545,12 @@ def run_doppler_slip(drive: Drive, vehicle: Vehicle, use_roll: bool = True) -> E
     summary="slip gain K from GNSS Doppler/IMU heading, roll via the a_y error scan, "
     "slip-corrected dead reckoning (no steering, no tyre data)",
     paper="seed 000 (Takikawa et al. 2021)",
+    settings=DopplerSlipSettings,
 )
-def doppler_slip(drive: Drive, vehicle: Vehicle) -> Estimate:
+def doppler_slip(drive: Drive, vehicle: Vehicle, settings: DopplerSlipSettings | None = None
+                 ) -> Estimate:
     """Seed 000's full method; see the module docstring."""
-    return run_doppler_slip(drive, vehicle, use_roll=True)
+    return run_doppler_slip(drive, vehicle, use_roll=True, settings=settings)
 
 
 @register(
@@ -418,7 +558,9 @@ def doppler_slip(drive: Drive, vehicle: Vehicle) -> Estimate:
     columns=("wz", SPEED, "gnss_ve", "gnss_vn"),
     summary="doppler_slip without the roll term (G_y = psi' V; eq 3 without cos(roll))",
     paper="seed 000 (Takikawa et al. 2021)",
+    settings=DopplerSlipSettings,
 )
-def doppler_slip_noroll(drive: Drive, vehicle: Vehicle) -> Estimate:
+def doppler_slip_noroll(drive: Drive, vehicle: Vehicle,
+                        settings: DopplerSlipSettings | None = None) -> Estimate:
     """Seed 000 without roll (the paper's comparison); see the module docstring."""
-    return run_doppler_slip(drive, vehicle, use_roll=False)
+    return run_doppler_slip(drive, vehicle, use_roll=False, settings=settings)

@@ -8,9 +8,17 @@ integrates into a drift.  It is the honest floor every other method must beat.
 
 Low speed: below ``V_GATE`` the relation is singular; beta is held at zero there (the vehicle
 restarts from rest with zero sideslip), which also handles standstill and reversing.
+
+Health (0 good ... 1 unusable): an open-loop integral can check nothing; what it knows is how
+fast it drifts.  Gravity through roll and bank and the accelerometer bias put an unmodelled
+``DRIFT_AY`` (0.3 m/s^2: 1.7 deg of roll or bank, or a 30 mg bias) into a_y, so the error grows
+as the integral of DRIFT_AY / v_x since the last reset; health is that over ``HEALTH_FULL_RAD``
+(2 deg), clipped to 1.  Reversing rows (beta = 0, not atan2(v_y, v_x) ~ +-pi) get 1.
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numba
 import numpy as np
@@ -18,11 +26,38 @@ from numpy.typing import NDArray
 
 from sideslip.drive import Drive
 from sideslip.estimate import Estimate
+from sideslip.methods.observer_health import stale_health
 from sideslip.methods.registry import SPEED, register
 from sideslip.signals import hold, vehicle_speed
 from sideslip.vehicle import Vehicle
 
 V_GATE = 3.0  # m/s: below this, beta is reset to zero
+DRIFT_AY = 0.3  # m/s^2: typical unmodelled a_y (gravity through roll/bank, bias)
+HEALTH_FULL_RAD = float(np.radians(2.0))
+
+
+@dataclass(frozen=True)
+class KinematicIntegrationSettings:
+    """Tuning of ``kinematic_integration``: ``v_gate_m_s`` (m/s), below which beta is reset."""
+
+    v_gate_m_s: float = V_GATE
+
+    def __post_init__(self) -> None:
+        if not (np.isfinite(self.v_gate_m_s) and 0.5 <= self.v_gate_m_s <= 30.0):
+            raise ValueError(f"KinematicIntegrationSettings.v_gate_m_s = {self.v_gate_m_s}: "
+                             "expected 0.5 ... 30 m/s")
+
+
+def drift_health(t: NDArray, vx: NDArray, v_gate: float) -> NDArray:
+    """Per-row health of the module docstring (integral of DRIFT_AY / v_x since the reset)."""
+    dt = np.diff(t, prepend=t[0])
+    rate = np.where(vx >= v_gate, DRIFT_AY / np.maximum(vx, v_gate), 0.0) * dt
+    c = np.cumsum(rate)
+    reset = np.where(vx < v_gate, np.arange(t.size), -1)
+    np.maximum.accumulate(reset, out=reset)
+    drift = c - np.where(reset >= 0, c[np.maximum(reset, 0)], 0.0)
+    health = np.clip(drift / HEALTH_FULL_RAD, 0.0, 1.0)
+    return np.asarray(np.where(vx <= -0.1, 1.0, health), dtype=float)
 
 
 @numba.njit(cache=True)
@@ -44,16 +79,25 @@ def _integrate(t: NDArray, ay: NDArray, r: NDArray, vx: NDArray, v_gate: float) 
     columns=("wz", "ay", SPEED),
     summary="open-loop integration of beta' = a_y/v_x - r (drifts; the baseline)",
     paper="seed 003 (kinematic model)",
+    settings=KinematicIntegrationSettings,
 )
-def kinematic_integration(drive: Drive, vehicle: Vehicle) -> Estimate:
+def kinematic_integration(drive: Drive, vehicle: Vehicle,
+                          settings: KinematicIntegrationSettings | None = None) -> Estimate:
     """Sideslip by integrating beta' = a_y/v_x - r from zero; see module docstring."""
+    st = settings or KinematicIntegrationSettings()
     ay, _ = hold(drive["ay"], drive.t)
     r, _ = hold(drive["wz"], drive.t)
     vx = vehicle_speed(drive)
-    beta = _integrate(drive.t, ay, r, vx, V_GATE)
+    beta = _integrate(drive.t, ay, r, vx, st.v_gate_m_s)
+    health = drift_health(drive.t, vx, st.v_gate_m_s)
+    imu = np.isfinite(drive["ay"]) & np.isfinite(drive["wz"])
+    health = np.maximum(health, stale_health(drive.t, imu))  # held samples in a sensor gap
     return Estimate(
         "kinematic_integration",
         drive.t,
-        {"beta": beta, "r": r},
-        {"v_gate_mps": V_GATE, "gravity_compensation": False},
+        {"beta": beta, "r": r, "health": health},
+        {"v_gate_m_s": st.v_gate_m_s, "gravity_compensation": False,
+         "health": {"criterion": f"open-loop drift of {DRIFT_AY} m/s^2 / v_x since the reset, "
+                    f"1 at {np.degrees(HEALTH_FULL_RAD):.0f} deg",
+                    "flagged_share": float(np.mean(health > 0)) if health.size else 0.0}},
     )

@@ -63,7 +63,7 @@ zero-order hold; rows before a sensor's first sample take that first sample).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import NDArray
@@ -71,7 +71,9 @@ from scipy.signal import butter, sosfilt, sosfilt_zi
 
 from sideslip.drive import Drive
 from sideslip.estimate import Estimate
+from sideslip.methods.observer_health import stale_health
 from sideslip.methods.registry import SPEED, register
+from sideslip.methods.roll_gradient import RollGradient, identify_roll_gradient
 from sideslip.models.roll import (
     dynamic_bank_weight,
     dynamic_factor,
@@ -112,6 +114,21 @@ ROLL_PARAMS = (
     "mass", "lf", "lr", "cf", "cr", "cg_height", "roll_axis_height", "roll_stiffness",
     "steering_ratio",
 )  # fmt: skip
+
+
+@dataclass(frozen=True)
+class RollSettings:
+    """Tuning of ``roll_index`` and ``roll_dfc``: ``roll_cutoff_hz`` (Hz, low-pass of the roll
+    channels), ``identify_roll_gradient`` (use the drive's suspension roll gradient where it
+    contradicts the file, :mod:`sideslip.methods.roll_gradient`)."""
+
+    roll_cutoff_hz: float = ROLL_CUTOFF_HZ
+    identify_roll_gradient: bool = True
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.roll_cutoff_hz) and 0.05 <= self.roll_cutoff_hz <= 20.0):
+            raise ValueError(f"RollSettings.roll_cutoff_hz = {self.roll_cutoff_hz}: expected "
+                             "0.05 ... 20 Hz")
 
 
 @dataclass(frozen=True)
@@ -249,6 +266,7 @@ class RollEstimate:
     g: BoolArray
     h: BoolArray
     k: BoolArray
+    params: dict[str, object] = field(default_factory=dict)
 
 
 def _channels(inp: Inputs, vehicle: Vehicle, cutoff: float
@@ -285,11 +303,30 @@ def yaw_bank_resolution(vehicle: Vehicle, speed: FloatArray, delta: FloatArray) 
     return np.asarray(steer + gyro, dtype=float)
 
 
-def estimate_roll_index(inp: Inputs, vehicle: Vehicle) -> RollEstimate:
-    """Eqs 41-61 with the roll index as described in the module docstring."""
+def roll_vehicle(vehicle: Vehicle, grad: RollGradient) -> Vehicle:
+    """The vehicle with its roll stiffness set so that m h / k is the identified gradient
+    (when it was identified; the file's roll inertia and damping, or the typical roll
+    dynamics, are kept)."""
+    if not grad.applied:
+        return vehicle
+    inertia, damping, _ = roll_dynamics(vehicle)
+    return vehicle.with_changes(
+        roll_stiffness=vehicle.mass * (vehicle.cg_height - vehicle.roll_axis_height) / grad.value,
+        roll_inertia=inertia, roll_damping=damping,
+    )
+
+
+def estimate_roll_index(inp: Inputs, vehicle: Vehicle, identify_gradient: bool = True,
+                        roll_cutoff_hz: float = ROLL_CUTOFF_HZ) -> RollEstimate:
+    """Eqs 41-61 with the roll index as described in the module docstring.
+
+    ``identify_gradient``: the suspension roll gradient of eq 41-43 from the drive where it
+    informs it and contradicts the file (:mod:`sideslip.methods.roll_gradient`), else the
+    file's m h / k.
+    """
     t = inp.t
     moving = np.abs(inp.vx) >= V_MIN
-    s_ss, s_ay, s_r, _, ay_f, _ = _channels(inp, vehicle, ROLL_CUTOFF_HZ)
+    s_ss, s_ay, s_r, _, ay_f, _ = _channels(inp, vehicle, roll_cutoff_hz)
     phi_ss = np.arcsin(s_ss)
     # flags on more strongly smoothed channels
     fs_ss, fs_ay, fs_r, _, _, d_f = _channels(inp, vehicle, FLAG_CUTOFF_HZ)
@@ -309,7 +346,14 @@ def estimate_roll_index(inp: Inputs, vehicle: Vehicle) -> RollEstimate:
     d_sw = vehicle.steering_ratio * d_f
     k = ~seen_within(np.abs(d_sw * r_f) > K_TH, t, T_TH4)
     lam = (f & k & (g | h)) | ~moving
-    phi_sus = suspension_roll(t, ay_f, vehicle)
+    grad = identify_roll_gradient(t, ay_f, phi_ss, f & k & moving, moving).validated(
+        vehicle.static_roll_gain)
+    if not identify_gradient:
+        grad = RollGradient(grad.value, grad.sigma, grad.rows, grad.curves, False,
+                            "identification switched off (settings): file value used")
+    params = grad.params(vehicle.static_roll_gain)
+    used = roll_vehicle(vehicle, grad)
+    phi_sus = suspension_roll(t, ay_f, used)
     # eq 61: anchor = last row with lambda = 1 (phi*_ss is phi_ss there)
     idx = np.where(lam, np.arange(t.size), -1)
     np.maximum.accumulate(idx, out=idx)
@@ -317,11 +361,12 @@ def estimate_roll_index(inp: Inputs, vehicle: Vehicle) -> RollEstimate:
     roll = np.where(lam, phi_ss, phi_ss[anchor] + phi_sus - phi_sus[anchor])
     return RollEstimate(
         roll=roll, bank=roll - phi_sus, phi_ss=phi_ss, phi_ay=np.arcsin(s_ay),
-        phi_r=np.arcsin(s_r), phi_sus=phi_sus, lam=lam, f=f, g=g, h=h, k=k,
+        phi_r=np.arcsin(s_r), phi_sus=phi_sus, lam=lam, f=f, g=g, h=h, k=k, params=params,
     )
 
 
-def estimate_roll_dfc(inp: Inputs, vehicle: Vehicle) -> tuple[FloatArray, FloatArray]:
+def estimate_roll_dfc(inp: Inputs, vehicle: Vehicle, roll_cutoff_hz: float = ROLL_CUTOFF_HZ
+                      ) -> tuple[FloatArray, FloatArray, FloatArray]:
     """Tseng's dynamic bank (eqs 55-58): returns (roll, bank), rad.
 
     roll = asin(sin(phi_ss) w), w = max(0, 1 - |DFC| - |d sin(phi_ss)/dt|) (eq 58, DFC in
@@ -329,16 +374,54 @@ def estimate_roll_dfc(inp: Inputs, vehicle: Vehicle) -> tuple[FloatArray, FloatA
     steady phi_ss is bank + suspension roll).  Below ``V_MIN``, w = 1.
     """
     t = inp.t
-    s_ss, _, _, dfc, ay_f, _ = _channels(inp, vehicle, ROLL_CUTOFF_HZ)
+    s_ss, _, _, dfc, ay_f, _ = _channels(inp, vehicle, roll_cutoff_hz)
     w = dynamic_bank_weight(dfc, ddt(s_ss, t))
     w = np.where(np.abs(inp.vx) >= V_MIN, w, 1.0)
     phi_sus = suspension_roll(t, ay_f, vehicle)
     roll = np.arcsin(np.clip(s_ss * w, -1.0, 1.0))
-    return roll, w * (np.arcsin(s_ss) - phi_sus)
+    return roll, w * (np.arcsin(s_ss) - phi_sus), w
 
 
 def _fraction(x: BoolArray) -> float:
     return float(np.mean(x)) if x.size else 0.0
+
+
+def _imu_fresh(drive: Drive) -> BoolArray:
+    ok = np.ones(len(drive), dtype=bool)
+    for name in ("wz", "ay"):
+        if name in drive:
+            ok &= np.isfinite(drive[name])
+    return ok
+
+
+HOLD_FULL_S = 10.0  # s of eq-61 integration from the last static anchor at which health = 0.5
+SLOW_HEALTH = 0.2  # moving below V_MIN: lambda forced to 1, v_y' and Tseng's gains unchecked
+
+
+def roll_index_health(inp: Inputs, est: RollEstimate, imu_fresh: BoolArray | None = None
+                      ) -> tuple[FloatArray, dict[str, object]]:
+    """Health of the roll index (0 good ... 1 unusable) from what it checks itself.
+
+    0 where the static relation is trusted (lambda = 1, all flags agree); while lambda = 0 the
+    roll is the last static value plus eq 41's change, and a bank change since the anchor goes
+    unseen: health rises linearly to 0.5 at ``HOLD_FULL_S`` s from the anchor; rolling slower
+    than ``V_MIN``: ``SLOW_HEALTH``; standstill 0 (the accelerometer tilt is exact).
+    """
+    t = inp.t
+    idx = np.where(est.lam, np.arange(t.size), -1)
+    np.maximum.accumulate(idx, out=idx)
+    since = np.where(idx >= 0, t - t[np.maximum(idx, 0)], t - t[0])
+    moving = np.abs(inp.vx) >= V_MIN
+    rolling = np.abs(inp.vx) >= 0.1
+    health = np.where(moving, np.clip(0.5 * since / HOLD_FULL_S, 0.0, 0.5),
+                      np.where(rolling, SLOW_HEALTH, 0.0))
+    if imu_fresh is not None:  # held IMU samples (a sensor gap): observer_health.stale_health
+        health = np.maximum(health, stale_health(t, imu_fresh))
+    return health, {
+        "criterion": f"time since the last static anchor (0.5 at {HOLD_FULL_S:g} s), slow rolling",
+        "flagged_share": _fraction(health > 0),
+        "max_hold_s": float(since[moving].max()) if moving.any() else 0.0,
+    }
 
 
 @register(
@@ -347,21 +430,27 @@ def _fraction(x: BoolArray) -> float:
     summary="roll/bank by seed 003's roll index: static bank when steady, suspension roll else",
     paper="seed 003 (eqs 41-61)",
     vehicle_params=ROLL_PARAMS,
+    settings=RollSettings,
 )
-def roll_index(drive: Drive, vehicle: Vehicle) -> Estimate:
+def roll_index(drive: Drive, vehicle: Vehicle, settings: RollSettings | None = None
+               ) -> Estimate:
     """Total roll and road bank by the roll index (see module docstring)."""
+    st = settings or RollSettings()
     inp = sensor_inputs(drive)
-    est = estimate_roll_index(inp, vehicle)
+    est = estimate_roll_index(inp, vehicle, st.identify_roll_gradient, st.roll_cutoff_hz)
+    health, summary = roll_index_health(inp, est, _imu_fresh(drive))
     return Estimate(
         "roll_index",
         drive.t,
-        {"roll": est.roll, "bank": est.bank, "gyro_bias": inp.gyro_bias},
+        {"roll": est.roll, "bank": est.bank, "gyro_bias": inp.gyro_bias, "health": health},
         {
+            **est.params,
+            "health": summary,
             "lambda_fraction": _fraction(est.lam),
             "flag_fraction": {"f": _fraction(est.f), "g": _fraction(est.g),
                               "h": _fraction(est.h), "k": _fraction(est.k)},
             "v_min_mps": V_MIN,
-            "roll_cutoff_hz": ROLL_CUTOFF_HZ,
+            "roll_cutoff_hz": st.roll_cutoff_hz,
             "flag_cutoff_hz": FLAG_CUTOFF_HZ,
             "understeer_gradient": vehicle.understeer_gradient,
             "roll_dynamics_assumed": roll_dynamics(vehicle)[2],
@@ -375,15 +464,25 @@ def roll_index(drive: Drive, vehicle: Vehicle) -> Estimate:
     summary="roll/bank by Tseng's dynamic factor (seed 003's comparison)",
     paper="seed 003 (eqs 46, 49-58; Tseng)",
     vehicle_params=ROLL_PARAMS[:-1],
+    settings=RollSettings,
 )
-def roll_dfc(drive: Drive, vehicle: Vehicle) -> Estimate:
-    """Tseng's dynamic bank estimate as roll, and the bank without suspension roll."""
+def roll_dfc(drive: Drive, vehicle: Vehicle, settings: RollSettings | None = None) -> Estimate:
+    """Tseng's dynamic bank estimate as roll, and the bank without suspension roll.
+
+    ``health`` = 1 - w (eq 58's weight: how far the method distrusts its own static bank
+    estimate -- the dynamic factor says the channels disagree) while moving, 0 at rest.
+    ``identify_roll_gradient`` of the settings does not apply (eq 58's roll does not use it).
+    """
+    st = settings or RollSettings()
     inp = sensor_inputs(drive)
-    roll, bank = estimate_roll_dfc(inp, vehicle)
+    roll, bank, w = estimate_roll_dfc(inp, vehicle, st.roll_cutoff_hz)
+    health = np.where(np.abs(inp.vx) >= V_MIN, 1.0 - w, 0.0)
+    health = np.maximum(health, stale_health(inp.t, _imu_fresh(drive)))
     return Estimate(
         "roll_dfc",
         drive.t,
-        {"roll": roll, "bank": bank, "gyro_bias": inp.gyro_bias},
-        {"v_min_mps": V_MIN, "roll_cutoff_hz": ROLL_CUTOFF_HZ,
-         "understeer_gradient": vehicle.understeer_gradient},
+        {"roll": roll, "bank": bank, "gyro_bias": inp.gyro_bias, "health": health},
+        {"v_min_mps": V_MIN, "roll_cutoff_hz": st.roll_cutoff_hz,
+         "understeer_gradient": vehicle.understeer_gradient,
+         "health": {"criterion": "1 - w of eq 58", "flagged_share": _fraction(health > 0)}},
     )
