@@ -30,6 +30,7 @@ from __future__ import annotations
 import math
 
 import numba
+import numpy as np
 from numpy.typing import NDArray
 
 
@@ -38,22 +39,32 @@ def predict_sparse(P: NDArray, F: NDArray, rows: NDArray, q: NDArray, Pn: NDArra
     """``Pn = F P F' + diag(q)`` with ``F``'s non-zero columns per row in ``rows``."""
     n = P.shape[0]
     w = rows.shape[1]
+    cnt = np.empty(n, dtype=np.int64)
+    for i in range(n):
+        c = 0
+        while c < w and rows[i, c] >= 0:
+            c += 1
+        cnt[i] = c
     for i in range(n):  # tmp = F P
+        ci = cnt[i]
+        if ci == 1:
+            col = rows[i, 0]
+            f = F[i, col]
+            for j in range(n):
+                tmp[i, j] = f * P[col, j]
+            continue
         for j in range(n):
             acc = 0.0
-            for m in range(w):
+            for m in range(ci):
                 col = rows[i, m]
-                if col < 0:
-                    break
                 acc += F[i, col] * P[col, j]
             tmp[i, j] = acc
-    for i in range(n):  # Pn = tmp F' (symmetric: upper triangle, mirrored)
-        for j in range(i, n):
+    for j in range(n):  # Pn = tmp F' (symmetric: computed for i <= j, mirrored)
+        cj = cnt[j]
+        for i in range(j + 1):
             acc = 0.0
-            for m in range(w):
+            for m in range(cj):
                 col = rows[j, m]
-                if col < 0:
-                    break
                 acc += tmp[i, col] * F[j, col]
             Pn[i, j] = acc
             Pn[j, i] = acc

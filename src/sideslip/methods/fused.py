@@ -89,7 +89,7 @@ class FusedSettings:
     ``*_psd``: random-walk density per sqrt(s); ``*_tau_s``: time constants.  Defaults are
     for a MEMS IMU, automotive wheel speeds and a u-blox M8-class receiver."""
 
-    step_s: float = 0.04  # smoother node spacing (0: every row); the filter uses every row
+    step_s: float = 0.05  # s: node spacing (0: every row); inputs averaged between nodes
     accel_vrw_psd: float = 0.1  # m/s/sqrt(s): accelerometer noise, vibration, roll transients
     gyro_arw_psd: float = 5e-4  # rad/sqrt(s): angle random walk (consumer MEMS 1e-4 ... 5e-4)
     gyro_standstill_sigma: float = 0.003  # rad/s per sample, the standstill yaw-rate update
@@ -116,7 +116,7 @@ class FusedSettings:
     force_rel: float = 0.15  # relative error of the axle forces (load transfer, camber, lag)
     gate_chi2: float = 16.0  # NIS beyond which a wheel/axle update is down-weighted (Huber-type)
     gnss_gate_chi2: float = 16.0  # the same for GNSS (2 dof)
-    gnss_reject_reset_s: float = 1.0  # s: after this long without an accepted epoch, accept
+    gnss_reject_reset_s: float = 0.5  # s: after this long without an accepted epoch, accept
     standstill_speed: float = 0.05  # m/s
     force_tau_s: float = 0.15  # s: low-pass of the measured axle forces (tyre relaxation)
     stiffness_curve_accel: float = 0.5  # m/s^2: an axle's stiffness learned beyond this force
@@ -336,19 +336,16 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     delta = _hold(drive, "steer") if use_front else np.full(n, np.nan)
     if not use_front:
         f_front = np.full(n, np.nan)
-    # nodes
-    stride = 1
-    if smooth and nz.step_s > 0 and n > 1:
-        stride = max(1, int(round(nz.step_s / drive.dt_median)))
+    # nodes: every stride-th row, every GNSS epoch (so that fixes and Doppler velocities are
+    # applied at their own time) and, for the smoother, the last row
+    stride = max(1, round(nz.step_s / drive.dt_median)) if nz.step_s > 0 and n > 1 else 1
     g_rows = np.flatnonzero(
         (np.isfinite(gn["gnss_e"]) & np.isfinite(gn["gnss_n"]))
         | (np.isfinite(gn["gnss_ve"]) & np.isfinite(gn["gnss_vn"]))
     )
-    # nodes: every stride-th row, the last row and every GNSS epoch (so that fixes and
-    # Doppler velocities are applied at their own time)
     idx = np.arange(0, n, stride)
     if stride > 1:
-        idx = np.union1d(np.append(idx, [n - 1]), g_rows)
+        idx = np.union1d(np.append(idx, [n - 1]) if smooth else idx, g_rows)
     elif idx[-1] != n - 1:
         idx = np.append(idx, n - 1)
     tn = t[idx]
@@ -373,31 +370,59 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     dof = np.where(np.isfinite(chan), dof_per, 0.0).sum(axis=1)
     nis_sum = np.where(np.isfinite(chan), chan, 0.0).sum(axis=1)
     cons = nis_consistency(tn, nis_sum, dof, window_s=nz.health_window_s, causal=not smooth)
-
-    def rows_of(a: FloatArray) -> FloatArray:
-        return a if stride == 1 else np.interp(t, tn, a)
-
-    X = np.column_stack([rows_of(xs[:, i]) for i in range(nx)]) if stride > 1 else xs
-    V = np.column_stack([rows_of(var[:, i]) for i in range(nx)]) if stride > 1 else var
-    c_vv = rows_of(cov_vxvy)
-    inflation = rows_of(cons.inflation)
-    health = rows_of(cons.health)
+    need = [IE, IN, IPSI, IVX, IVY, IBG, ICY, ICX, ISG]
+    nodes = {i: xs[:, i] for i in need}
+    nodes.update({("var", i): var[:, i] for i in (IE, IN, IPSI, IVX, IVY)})
+    nodes.update(cvv=cov_vxvy, inflation=cons.inflation, health=cons.health)
+    if stride == 1:
+        rows = nodes
+    elif smooth:  # linear interpolation of the smoothed nodes
+        rows = {k: np.interp(t, tn, v) for k, v in nodes.items()}
+    else:  # causal: the last node, propagated to the row with the row's IMU sample
+        rows = _propagate_causal(t, tn, idx, nodes, wz, wy, ax, ay, fy_lp, k_phi)
     return _estimate(
-        drive, vehicle, smooth, nz, X, V, c_vv, inflation, health, cons, tn, counts,
-        k_phi, fy_lp, wz, wy, has_pos, has_vel, use_front, notes, stride,
+        drive, vehicle, smooth, rows, xs, var, cons, tn, counts,
+        k_phi, fy_lp, wz, wy, has_pos, has_vel, use_front, notes,
     )  # fmt: skip
+
+
+def _propagate_causal(
+    t: FloatArray,
+    tn: FloatArray,
+    idx: NDArray[np.intp],
+    nodes: dict[Any, FloatArray],
+    wz: FloatArray,
+    wy: FloatArray,
+    ax: FloatArray,
+    ay: FloatArray,
+    fy_lp: FloatArray,
+    k_phi: float,
+) -> dict[Any, FloatArray]:
+    """Filter output on every row from the latest node at or before it: one Euler step of
+    the process model over the (< one node step) gap with the row's own IMU sample."""
+    j = np.maximum(np.searchsorted(idx, np.arange(t.size), side="right") - 1, 0)
+    rows = {k: v[j] for k, v in nodes.items()}
+    dt = t - tn[j]
+    roll = np.arcsin(np.clip(rows[ICY] / G, -0.6, 0.6)) + k_phi * fy_lp
+    pitch = np.arcsin(np.clip(-rows[ICX] / G, -0.6, 0.6))
+    r = ((wz - rows[IBG]) * (1.0 - rows[ISG]) * np.cos(roll) + wy * np.sin(roll)) / np.cos(pitch)
+    vx, vy, psi = rows[IVX], rows[IVY], rows[IPSI]
+    c, s = np.cos(psi), np.sin(psi)
+    rows[IE] = rows[IE] + dt * (vx * c - vy * s)
+    rows[IN] = rows[IN] + dt * (vx * s + vy * c)
+    rows[IPSI] = psi + dt * r
+    rows[IVX] = vx + dt * (ax - rows[ICX] + r * vy)
+    rows[IVY] = vy + dt * (ay * (1.0 - G * k_phi) - rows[ICY] - r * vx)
+    return rows
 
 
 def _estimate(
     drive: Drive,
     vehicle: Vehicle,
     smooth: bool,
-    nz: FusedSettings,
-    X: FloatArray,
-    V: FloatArray,
-    c_vv: FloatArray,
-    inflation: FloatArray,
-    health: FloatArray,
+    rows: dict[Any, FloatArray],
+    xs: FloatArray,
+    var: FloatArray,
     cons: Any,
     tn: FloatArray,
     counts: NDArray[np.int64],
@@ -409,56 +434,56 @@ def _estimate(
     has_vel: bool,
     use_front: bool,
     notes: dict[str, str],
-    stride: int,
 ) -> Estimate:
-    """Output series and params of :func:`fuse`."""
+    """Output series (from the per-row ``rows``) and params (from the nodes) of :func:`fuse`."""
     t = drive.t
-    vx, vy = X[:, IVX], X[:, IVY]
+    vx, vy = rows[IVX], rows[IVY]
     speed2 = np.maximum(vx**2 + vy**2, 1e-6)
     moving = np.abs(vx) > 0.5
     beta = np.where(moving, np.arctan2(vy, np.maximum(np.abs(vx), 1e-3)), 0.0)
     jx, jy = -vy / speed2, vx / speed2  # gradient of atan2(v_y, v_x)
-    var_b = (jx**2 * V[:, IVX] + jy**2 * V[:, IVY] + 2 * jx * jy * c_vv) * inflation
+    var_b = jx**2 * rows[("var", IVX)] + jy**2 * rows[("var", IVY)] + 2 * jx * jy * rows["cvv"]
+    var_b = var_b * rows["inflation"]
     beta_std = np.where(moving, np.sqrt(np.maximum(var_b, 0.0)), math.radians(5.0))
     beta_std = np.minimum(beta_std, math.radians(30.0))
-    bank = np.arcsin(np.clip(X[:, ICY] / G, -0.6, 0.6))
+    bank = np.arcsin(np.clip(rows[ICY] / G, -0.6, 0.6))
     roll = bank + k_phi * fy_lp
-    pitch = np.arcsin(np.clip(-X[:, ICX] / G, -0.6, 0.6))
-    r = ((wz - X[:, IBG]) * (1.0 - X[:, ISG]) * np.cos(roll) + wy * np.sin(roll)) / np.cos(pitch)
-    sd = np.sqrt(np.maximum(V, 0.0))
+    pitch = np.arcsin(np.clip(-rows[ICX] / G, -0.6, 0.6))
+    r = ((wz - rows[IBG]) * (1.0 - rows[ISG]) * np.cos(roll) + wy * np.sin(roll)) / np.cos(pitch)
     series = {
-        "beta": beta, "beta_std": beta_std, "health": health, "r": r, "vx": vx, "vy": vy,
-        "gyro_bias": X[:, IBG], "roll": roll, "bank": bank, "pitch": pitch,
+        "beta": beta, "beta_std": beta_std, "health": rows["health"], "r": r, "vx": vx,
+        "vy": vy, "gyro_bias": rows[IBG], "roll": roll, "bank": bank, "pitch": pitch,
     }  # fmt: skip
+    std = {i: np.sqrt(np.maximum(rows[("var", i)], 0.0)) for i in (IE, IN, IPSI)}
     if has_pos or has_vel:  # without GNSS, heading and position are not observable
-        series.update(yaw=X[:, IPSI], yaw_std=sd[:, IPSI])
+        series.update(yaw=rows[IPSI], yaw_std=std[IPSI])
     if has_pos:
-        series.update(e=X[:, IE], n=X[:, IN], e_std=sd[:, IE], n_std=sd[:, IN])
-    cues = ["imu", speed_source(drive)]
-    cues.append("rear axle (brush tyre model)")
+        series.update(e=rows[IE], n=rows[IN], e_std=std[IE], n_std=std[IN])
+    cues = ["imu", speed_source(drive), "rear axle (brush tyre model)"]
     if use_front:
         cues.append("steer (front axle, brush tyre model)")
     if has_vel:
         cues.append("gnss_doppler")
     if has_pos:
         cues.append("gnss_position")
+    sd = np.sqrt(np.maximum(var, 0.0))
     pick = (lambda a: float(np.median(a))) if smooth else (lambda a: float(a[-1]))
     geom, _, _ = axle_geometry(vehicle)
     params: dict[str, Any] = {
         "cues": cues,
         "smoothed": smooth,
         "node_step_s": float(np.median(np.diff(tn))) if tn.size > 1 else 0.0,
-        "wheel_speed_scale": pick(X[:, ISW]),
-        "gyro_bias_rad_s": float(X[-1, IBG]),
+        "wheel_speed_scale": pick(xs[:, ISW]),
+        "gyro_bias_rad_s": float(xs[-1, IBG]),
         "gyro_bias_rad_s_sigma": float(sd[-1, IBG]),
-        "gyro_scale": 1.0 / (1.0 - pick(X[:, ISG])),
-        "front_stiffness_scale": pick(X[:, ISF]),
+        "gyro_scale": 1.0 / (1.0 - pick(xs[:, ISG])),
+        "front_stiffness_scale": pick(xs[:, ISF]),
         "front_stiffness_scale_sigma": float(sd[-1, ISF]),
-        "rear_stiffness_scale": pick(X[:, ISR]),
+        "rear_stiffness_scale": pick(xs[:, ISR]),
         "rear_stiffness_scale_sigma": float(sd[-1, ISR]),
-        "slip_gain_k_s2_m": float(geom[0] / ((geom[0] + geom[1]) * geom[3] * pick(X[:, ISR]))),
+        "slip_gain_k_s2_m": float(geom[0] / ((geom[0] + geom[1]) * geom[3] * pick(xs[:, ISR]))),
         "slip_gain_k_prior_s2_m": float(geom[0] / ((geom[0] + geom[1]) * geom[3])),
-        "mu_peak": float(np.percentile(X[:, IMU], 50)),
+        "mu": pick(xs[:, IMU]),
         "mu_sigma": float(np.median(sd[:, IMU])),
         "roll_gain_rad_per_m_s2": k_phi,
         "gnss_updates_accepted": int(counts[0]),
@@ -468,12 +493,12 @@ def _estimate(
         "health": cons.summary(tn),
         "assumed": notes,
     }
-    if X.shape[1] > NX_CORE:
+    if xs.shape[1] > NX_CORE:
         lever = np.array(vehicle.gnss_xyz, dtype=float)
         params.update(
-            gnss_latency_s=pick(X[:, ITAU]),
+            gnss_latency_s=pick(xs[:, ITAU]),
             gnss_latency_s_sigma=float(sd[-1, ITAU]),
-            gnss_lever_arm_xy_m=[float(lever[0] + pick(X[:, ILX])), float(lever[1] + pick(X[:, ILY]))],
+            gnss_lever_arm_xy_m=[float(lever[0] + pick(xs[:, ILX])), float(lever[1] + pick(xs[:, ILY]))],
             gnss_lever_arm_xy_m_sigma=[float(sd[-1, ILX]), float(sd[-1, ILY])],
         )
     return Estimate("fused" if smooth else "fused_filter", t, series, params)
