@@ -114,6 +114,7 @@ class FusedSettings:
     gnss_gm_tau_s: float = 60.0  # s, its correlation time
     force_sigma: float = 0.15  # m/s^2 floor on an axle relation's residual
     force_rel: float = 0.15  # relative error of the axle forces (load transfer, camber, lag)
+    axle_error_tau_s: float = 0.05  # s: correlation time of the axle relations' model error
     gate_chi2: float = 16.0  # NIS beyond which a wheel/axle update is down-weighted (Huber-type)
     gnss_gate_chi2: float = 16.0  # the same for GNSS (2 dof)
     gnss_reject_reset_s: float = 0.5  # s: after this long without an accepted epoch, accept
@@ -127,7 +128,7 @@ class FusedSettings:
     axle_min_speed: float = 3.0  # m/s: below this the slip angles are ill-defined
     front_axle: bool = False  # use the steering angle (front-axle relation) when present
     yaw_acceleration: bool = False  # split the axle forces with the yaw acceleration too
-    identify_gnss_calibration: bool = True  # latency and lever arm on positions-only drives
+    identify_gnss_calibration: bool = False  # latency and lever arm as states (positions only)
     health_window_s: float = 2.0  # s: window of the consistency test
 
     def __post_init__(self) -> None:
@@ -242,6 +243,8 @@ def _initial_state(drive: Drive, vw: FloatArray, nx: int, nz: FusedSettings) -> 
     x0 = np.zeros(nx)
     rows, course, _ = gnss_course(drive, min_speed=3.0)
     x0[IPSI] = course[0] if rows.size else 0.0
+    if "gnss_ve" not in drive and "gnss_e" in drive and "gnss_n" in drive:
+        x0[IPSI] = _initial_course_from_fixes(drive, x0[IPSI])
     if "gnss_e" in drive and "gnss_n" in drive:
         ok = np.flatnonzero(np.isfinite(drive["gnss_e"]) & np.isfinite(drive["gnss_n"]))
         if ok.size:
@@ -263,6 +266,26 @@ def _initial_state(drive: Drive, vw: FloatArray, nx: int, nz: FusedSettings) -> 
     return x0, np.diag(sig**2)
 
 
+def _initial_course_from_fixes(drive: Drive, fallback: float) -> float:
+    """Course (rad) over the first >= 10 m the antenna travels, from the fixes: two fixes a
+    twentieth of a second apart give a course of +-10 deg from 0.1 m noise (and any multipath
+    jump gives nonsense), a 10 m baseline about 1 deg."""
+    ok = np.flatnonzero(np.isfinite(drive["gnss_e"]) & np.isfinite(drive["gnss_n"]))
+    if ok.size < 3:
+        return fallback
+    e, n = drive["gnss_e"][ok], drive["gnss_n"][ok]
+    for i in range(min(ok.size - 1, 200)):
+        d = np.hypot(e[i + 1 :] - e[i], n[i + 1 :] - n[i])
+        far = np.flatnonzero(d > 10.0)
+        if far.size and drive.t[ok[i + 1 + far[0]]] - drive.t[ok[i]] < 5.0:
+            j = i + 1 + far[0]
+            # the median of the courses to the next fixes beyond 10 m resists one bad fix
+            js = np.arange(j, min(j + 5, ok.size))
+            courses = np.arctan2(n[js] - n[i], e[js] - e[i])
+            return float(np.angle(np.exp(1j * courses).sum()))
+    return fallback
+
+
 def _process_psd(nx: int, nz: FusedSettings) -> FloatArray:
     q = np.zeros(nx)
     q[IBG] = nz.gyro_bias_psd**2
@@ -280,7 +303,7 @@ def _process_psd(nx: int, nz: FusedSettings) -> FloatArray:
     return q
 
 
-def _config(nz: FusedSettings, k_phi: float) -> FloatArray:
+def _config(nz: FusedSettings, k_phi: float, calibrate: bool, has_vel: bool) -> FloatArray:
     cfg = np.zeros(eng.N_CFG)
     cfg[eng.C_WHEEL_SIGMA] = nz.wheel_sigma
     cfg[eng.C_STILL_SPEED] = nz.standstill_speed
@@ -291,6 +314,10 @@ def _config(nz: FusedSettings, k_phi: float) -> FloatArray:
     cfg[eng.C_GATE] = nz.gate_chi2
     cfg[eng.C_GATE_GNSS] = nz.gnss_gate_chi2
     cfg[eng.C_GNSS_RESET] = nz.gnss_reject_reset_s
+    cfg[eng.C_AXLE_TAU] = nz.axle_error_tau_s
+    if not calibrate and not has_vel:  # positions only, calibration not identified
+        cfg[eng.C_POS_LEVER] = nz.lever_prior_sigma_m
+        cfg[eng.C_POS_LATENCY] = nz.latency_prior_sigma_s
     cfg[eng.C_FORCE_SIGMA] = nz.force_sigma
     cfg[eng.C_FORCE_REL] = nz.force_rel
     cfg[eng.C_ADAPT_TAU] = nz.adapt_tau_s
@@ -362,7 +389,7 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
         tn, U, vw_n, f_front[idx], f_rear[idx], delta[idx], mu_floor[idx],
         g_node, g_age, gn["gnss_e"][g_rows], gn["gnss_n"][g_rows], gn["pstd"][g_rows],
         gn["gnss_ve"][g_rows], gn["gnss_vn"][g_rows], gn["vstd"][g_rows],
-        x0, P0, q, f_rows(nx), geom, lever, _config(nz, k_phi), smooth,
+        x0, P0, q, f_rows(nx), geom, lever, _config(nz, k_phi, calibrate, has_vel), smooth,
     )  # fmt: skip
     # consistency between cues: windowed NIS of the axle and GNSS innovations
     chan = nis[:, [eng.K_REAR, eng.K_FRONT, eng.K_GNSS_VEL, eng.K_GNSS_POS]]

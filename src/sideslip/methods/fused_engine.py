@@ -61,10 +61,11 @@ from sideslip.models.fused_process import IMU, ISF, ISR, IVX, IVY, process_into
     C_MU_FLOOR_SIGMA,
     C_GATE_GNSS,
     C_GNSS_RESET,
-) = range(18)
-N_CFG = 18
-
-AXLE_REFERENCE_DT = 0.02  # s: the axle-relation sigmas are per 50 Hz sample
+    C_AXLE_TAU,
+    C_POS_LEVER,
+    C_POS_LATENCY,
+) = range(21)
+N_CFG = 21
 
 # innovation channels recorded per node (NIS, NaN where none)
 K_WHEEL, K_REAR, K_FRONT, K_GNSS_VEL, K_GNSS_POS = range(5)
@@ -175,10 +176,10 @@ def run_nodes(
             hv = wheel_speed(x, h)
             d2, ok = robust_scalar(x, P, vw[k] - hv, h, cfg[C_WHEEL_SIGMA] ** 2, gate, ph0)
             nis[k, K_WHEEL] = d2
-        # the axle relations' error is a slowly varying model error, not white noise: their
-        # variance is quoted at AXLE_REFERENCE_DT and scaled so that the information per
-        # second does not depend on the node rate
-        rate_scale = AXLE_REFERENCE_DT / max(dtk, 1e-3) if k > 0 else 1.0
+        # the axle relations' error is a model error correlated over C_AXLE_TAU seconds, not
+        # white noise: their variance is quoted per C_AXLE_TAU and scaled by C_AXLE_TAU / dt,
+        # so that the information per second does not depend on the node rate
+        rate_scale = cfg[C_AXLE_TAU] / max(dtk, 1e-3) if k > 0 else 1.0
         if x[IVX] > cfg[C_AXLE_MIN_SPEED]:
             # ---- axle force relations (brush model): the tyres' word on the slip angles
             if math.isfinite(f_rear[k]):
@@ -226,11 +227,11 @@ def run_nodes(
                 nis[k, K_GNSS_VEL] = d2 if not math.isfinite(nis[k, K_GNSS_VEL]) else nis[k, K_GNSS_VEL] + d2
                 counts[0 if ok else 1] += 1
             if math.isfinite(g_e[gi]) and math.isfinite(g_n[gi]):
-                he, hn = gnss_position(x, lever, g_age[gi], H2)
+                he, hn = gnss_position(x, u, cfg[C_K_PHI], lever, g_age[gi], H2)
+                # an unidentified latency and lever arm are position noise (speed x latency)
+                r_pos = g_pstd[gi] ** 2 + cfg[C_POS_LEVER] ** 2 + (x[IVX] * cfg[C_POS_LATENCY]) ** 2
                 g_gate = cfg[C_GATE_GNSS] if tn[k] - t_pos_ok < cfg[C_GNSS_RESET] else 1e300
-                d2, ok = robust_pair(
-                    x, P, H2, g_e[gi] - he, g_n[gi] - hn, g_pstd[gi] ** 2, g_gate, ph0, ph1, xb
-                )
+                d2, ok = robust_pair(x, P, H2, g_e[gi] - he, g_n[gi] - hn, r_pos, g_gate, ph0, ph1, xb)
                 if ok:
                     t_pos_ok = tn[k]
                 nis[k, K_GNSS_POS] = d2 if not math.isfinite(nis[k, K_GNSS_POS]) else nis[k, K_GNSS_POS] + d2

@@ -15,9 +15,10 @@ the filter loop calls them per row; tests check every ``H`` against central diff
   ``f_r = (l_f f_y - (I_z/m) r') / L``, the single-track force and moment balance, seed 003
   eqs 1-2 / seed 002 eq 1)
 * GNSS Doppler       antenna velocity ``R(psi) (v + omega x l)`` (ENU), ``l`` the lever arm
-* GNSS position      antenna position ``p + R(psi) l + p_gm - R(psi) v (age + tau)``: a fix
+* GNSS position      antenna position ``p + R(psi) l' + p_gm - R(psi) v (age + tau)``: a fix
                      stamped ``age`` seconds before the filter's node and ``tau`` (the
-                     receiver latency, a state when present) before its stamp.
+                     receiver latency, a state when present) before its stamp; ``l'`` the
+                     lever arm with the antenna height tilted by roll and pitch.
 
 ``lever`` is ``[l_x, l_y, l_z]`` of the vehicle file; with the calibration states present
 (``x.size > ILY``) the antenna sits at ``[l_x + dl_x, l_y + dl_y, l_z]``.
@@ -51,8 +52,10 @@ from sideslip.models.fused_process import (
     ITAU,
     IVX,
     IVY,
+    U_FY,
     U_WX,
     U_WY,
+    attitude,
     yaw_rate,
 )
 
@@ -170,13 +173,30 @@ def gnss_velocity(
     return vxa * c - vya * s, vxa * s + vya * c
 
 
+LATENCY_RANGE_S = (-0.1, 0.5)  # the latency the model admits (beyond: held at the bound)
+
+
 @numba.njit(cache=True)
-def gnss_position(x: NDArray, lever: NDArray, age_s: float, H: NDArray) -> tuple[float, float]:
-    """Antenna position ``[e, n]`` (m) of a fix ``age_s`` (+ latency) before the node."""
-    lx, ly, _, cal = _lever(x, lever)
+def gnss_position(
+    x: NDArray, u: NDArray, k_phi: float, lever: NDArray, age_s: float, H: NDArray
+) -> tuple[float, float]:
+    """Antenna position ``[e, n]`` (m) of a fix ``age_s`` (+ latency) before the node.
+
+    The antenna's height ``l_z`` shifts it by ``-l_z sin(roll)`` sideways and ``l_z sin(pitch)``
+    forwards (a roof antenna 1.3 m up on a 5 deg bank sits 0.11 m to the side)."""
+    roll, pitch, d_roll, d_pitch = attitude(x, u[U_FY], k_phi)
+    lx0, ly0, lz, cal = _lever(x, lever)
+    lx = lx0 + lz * math.sin(pitch)
+    ly = ly0 - lz * math.sin(roll)
+    dlx_dcx = lz * math.cos(pitch) * d_pitch
+    dly_dcy = -lz * math.cos(roll) * d_roll
     c, s = math.cos(x[IPSI]), math.sin(x[IPSI])
     vx, vy = x[IVX], x[IVY]
-    lag = age_s + (x[ITAU] if cal else 0.0)
+    tau, dtau = 0.0, 0.0
+    if cal:
+        tau = min(max(x[ITAU], LATENCY_RANGE_S[0]), LATENCY_RANGE_S[1])
+        dtau = 1.0 if tau == x[ITAU] else 0.0
+    lag = age_s + tau
     ve = vx * c - vy * s
     vn = vx * s + vy * c
     H[:, :] = 0.0
@@ -190,9 +210,13 @@ def gnss_position(x: NDArray, lever: NDArray, age_s: float, H: NDArray) -> tuple
     H[0, IVY] = lag * s
     H[1, IVX] = -lag * s
     H[1, IVY] = -lag * c
+    H[0, ICX] = c * dlx_dcx
+    H[1, ICX] = s * dlx_dcx
+    H[0, ICY] = -s * dly_dcy
+    H[1, ICY] = c * dly_dcy
     if cal:
-        H[0, ITAU] = -ve
-        H[1, ITAU] = -vn
+        H[0, ITAU] = -ve * dtau
+        H[1, ITAU] = -vn * dtau
         H[0, ILX] = c
         H[1, ILX] = s
         H[0, ILY] = -s
