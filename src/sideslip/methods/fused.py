@@ -408,7 +408,7 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     else:  # causal: the last node, propagated to the row with the row's IMU sample
         rows = _propagate_causal(t, tn, idx, nodes, wz, wy, ax, ay, fy_lp, k_phi)
     return _estimate(
-        drive, vehicle, smooth, rows, xs, var, cons, tn, counts,
+        drive, vehicle, smooth, nz, rows, xs, var, cons, tn, counts,
         k_phi, fy_lp, wz, wy, has_pos, has_vel, use_front, notes,
     )  # fmt: skip
 
@@ -447,6 +447,7 @@ def _estimate(
     drive: Drive,
     vehicle: Vehicle,
     smooth: bool,
+    nz: FusedSettings,
     rows: dict[Any, FloatArray],
     xs: FloatArray,
     var: FloatArray,
@@ -471,6 +472,13 @@ def _estimate(
     jx, jy = -vy / speed2, vx / speed2  # gradient of atan2(v_y, v_x)
     var_b = jx**2 * rows[("var", IVX)] + jy**2 * rows[("var", IVY)] + 2 * jx * jy * rows["cvv"]
     var_b = var_b * rows["inflation"]
+    if not (has_pos or has_vel):
+        # without GNSS nothing but the tyre relations pins v_y, and their error is correlated
+        # over whole corners: the rear slip angle carries the relation's relative error
+        geom_v, _, _ = axle_geometry(vehicle)
+        r_row = wz - rows[IBG]  # bias-corrected yaw rate, rad/s
+        alpha_r = -(vy - geom_v[1] * r_row) / np.maximum(np.abs(vx), 1.0)
+        var_b = var_b + (nz.force_rel * alpha_r) ** 2 + (nz.force_sigma / geom_v[3]) ** 2
     beta_std = np.where(moving, np.sqrt(np.maximum(var_b, 0.0)), math.radians(5.0))
     beta_std = np.minimum(beta_std, math.radians(30.0))
     bank = np.arcsin(np.clip(rows[ICY] / G, -0.6, 0.6))

@@ -386,7 +386,7 @@ def gnss(
     # the truth an epoch reports: latency rounded to the table's step (rows before the stamp)
     src = epochs
     if config.gnss_latency_s > 0.0 and truth.t.size > 1:
-        lag_rows = int(round(config.gnss_latency_s / float(np.median(np.diff(truth.t)))))
+        lag_rows = round(config.gnss_latency_s / float(np.median(np.diff(truth.t))))
         src = np.maximum(epochs - lag_rows, 0)
     rot = body_to_enu(truth.yaw[src], truth.pitch[src], truth.roll[src])
     lever = np.asarray(vehicle.gnss_xyz, dtype=float)
