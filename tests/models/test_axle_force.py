@@ -36,6 +36,12 @@ def test_derivatives_match_central_differences(z):
     so the error is O(step^2) relative, well inside 1e-6)."""
     f, dz, dc, df = fiala_force(z, C, F)
     h = 1e-6
-    assert dz == pytest.approx((fiala_force(z + h, C, F)[0] - fiala_force(z - h, C, F)[0]) / (2 * h), rel=1e-5, abs=1e-6)
-    assert dc == pytest.approx((fiala_force(z, C + h, F)[0] - fiala_force(z, C - h, F)[0]) / (2 * h), rel=1e-5, abs=1e-6)
-    assert df == pytest.approx((fiala_force(z, C, F + h)[0] - fiala_force(z, C, F - h)[0]) / (2 * h), rel=1e-5, abs=1e-6)
+    assert dz == pytest.approx(
+        (fiala_force(z + h, C, F)[0] - fiala_force(z - h, C, F)[0]) / (2 * h), rel=1e-5, abs=1e-6
+    )
+    assert dc == pytest.approx(
+        (fiala_force(z, C + h, F)[0] - fiala_force(z, C - h, F)[0]) / (2 * h), rel=1e-5, abs=1e-6
+    )
+    assert df == pytest.approx(
+        (fiala_force(z, C, F + h)[0] - fiala_force(z, C, F - h)[0]) / (2 * h), rel=1e-5, abs=1e-6
+    )
