@@ -34,7 +34,7 @@ def test_slope_is_c_times_one_minus_utilisation_squared():
 def test_derivatives_match_central_differences(z):
     """The three analytic partials against central differences (step 1e-6; the curve is C^1,
     so the error is O(step^2) relative, well inside 1e-6)."""
-    f, dz, dc, df = fiala_force(z, C, F)
+    _, dz, dc, df = fiala_force(z, C, F)
     h = 1e-6
     assert dz == pytest.approx(
         (fiala_force(z + h, C, F)[0] - fiala_force(z - h, C, F)[0]) / (2 * h), rel=1e-5, abs=1e-6

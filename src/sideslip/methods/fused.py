@@ -359,7 +359,7 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     f_rear = (geom[0] * fy_lp - iz_m * r_dot_lp) / wb
     # the friction the road must at least have to transmit the measured acceleration
     mu_floor = np.hypot(_low_pass(t, ax, nz.force_tau_s), fy_lp) / G
-    use_front = nz.front_axle and "steer" in drive and np.isfinite(drive["steer"]).any()
+    use_front = bool(nz.front_axle and "steer" in drive and np.isfinite(drive["steer"]).any())
     delta = _hold(drive, "steer") if use_front else np.full(n, np.nan)
     if not use_front:
         f_front = np.full(n, np.nan)
@@ -398,7 +398,7 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     nis_sum = np.where(np.isfinite(chan), chan, 0.0).sum(axis=1)
     cons = nis_consistency(tn, nis_sum, dof, window_s=nz.health_window_s, causal=not smooth)
     need = [IE, IN, IPSI, IVX, IVY, IBG, ICY, ICX, ISG]
-    nodes = {i: xs[:, i] for i in need}
+    nodes: dict[Any, FloatArray] = {i: xs[:, i] for i in need}
     nodes.update({("var", i): var[:, i] for i in (IE, IN, IPSI, IVX, IVY)})
     nodes.update(cvv=cov_vxvy, inflation=cons.inflation, health=cons.health)
     if stride == 1:
@@ -509,6 +509,7 @@ def _estimate(
         "smoothed": smooth,
         "node_step_s": float(np.median(np.diff(tn))) if tn.size > 1 else 0.0,
         "wheel_speed_scale": pick(xs[:, ISW]),
+        "wheel_speed_scale_factor": pick(xs[:, ISW]),  # the same (measured / true), older name
         "gyro_bias_rad_s": float(xs[-1, IBG]),
         "gyro_bias_rad_s_sigma": float(sd[-1, IBG]),
         "gyro_scale": 1.0 / (1.0 - pick(xs[:, ISG])),

@@ -73,7 +73,7 @@ N_CHANNELS = 5
 
 
 @numba.njit(cache=True)
-def _predict(x, P, u, dt, cfg, q, rows, xn, Pn, F, dr, qk, tmp):  # type: ignore[no-untyped-def]
+def _predict(x, P, u, dt, cfg, q, rows, xn, Pn, F, dr, qk, tmp):
     process_into(x, u, dt, cfg[C_K_PHI], cfg[C_GM_TAU], xn, F, dr)
     vx, vy = x[IVX], x[IVY]
     for i in range(x.size):
@@ -87,7 +87,7 @@ def _predict(x, P, u, dt, cfg, q, rows, xn, Pn, F, dr, qk, tmp):  # type: ignore
 
 
 @numba.njit(cache=True)
-def _adapt(infl, nis, dt, cfg):  # type: ignore[no-untyped-def]
+def _adapt(infl, nis, dt, cfg):
     """Adaptive variance factor of an axle relation: grows while its NIS exceeds 1, decays
     back to 1 otherwise (time constant C_ADAPT_TAU)."""
     a = min(1.0, dt / cfg[C_ADAPT_TAU])
@@ -119,7 +119,7 @@ def run_nodes(
     lever,
     cfg,
     smooth,
-):  # type: ignore[no-untyped-def]
+):
     """Forward EKF over the nodes and (``smooth``) the RTS pass; see the module docstring.
 
     Returns ``(xs, var, cov_vxvy, nis, counts)``: states (N, nx), their variances, the

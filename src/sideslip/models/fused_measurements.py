@@ -27,6 +27,7 @@ the filter loop calls them per row; tests check every ``H`` against central diff
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numba
 import numpy as np
@@ -227,7 +228,7 @@ def gnss_position(
     )
 
 
-def predicted(func, x: NDArray, *args: object) -> tuple[NDArray, NDArray]:  # type: ignore[no-untyped-def]
+def predicted(func: Any, x: NDArray, *args: object) -> tuple[NDArray, NDArray]:
     """``(h, H)`` of a measurement function above as arrays (for tests and notebooks)."""
     x = np.asarray(x, dtype=float)
     two = func in (gnss_velocity, gnss_position)
