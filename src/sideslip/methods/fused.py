@@ -107,7 +107,8 @@ class FusedSettings:
     latency_psd: float = 1e-5  # s/sqrt(s)
     lever_prior_sigma_m: float = 0.5  # m: antenna positions users do not state
     lever_psd: float = 1e-5  # m/sqrt(s)
-    wheel_sigma: float = 0.05  # m/s
+    wheel_sigma: float = 0.05  # m/s: noise and quantisation
+    wheel_rel_sigma: float = 0.003  # fraction of the speed: wheel slip, rolling-radius changes
     gnss_vel_sigma: float = 0.1  # m/s, when the drive has no gnss_vel_std
     gnss_pos_sigma: float = 0.5  # m, white part, when the drive has no gnss_pos_std
     gnss_gm_sigma: float = 1.5  # m, correlated part of the position error per axis
@@ -315,6 +316,7 @@ def _config(nz: FusedSettings, k_phi: float, calibrate: bool, has_vel: bool) -> 
     cfg[eng.C_GATE_GNSS] = nz.gnss_gate_chi2
     cfg[eng.C_GNSS_RESET] = nz.gnss_reject_reset_s
     cfg[eng.C_AXLE_TAU] = nz.axle_error_tau_s
+    cfg[eng.C_WHEEL_REL] = nz.wheel_rel_sigma
     if not calibrate and not has_vel:  # positions only, calibration not identified
         cfg[eng.C_POS_LEVER] = nz.lever_prior_sigma_m
         cfg[eng.C_POS_LATENCY] = nz.latency_prior_sigma_s

@@ -64,8 +64,9 @@ from sideslip.models.fused_process import IMU, ISF, ISR, IVX, IVY, process_into
     C_AXLE_TAU,
     C_POS_LEVER,
     C_POS_LATENCY,
-) = range(21)
-N_CFG = 21
+    C_WHEEL_REL,
+) = range(22)
+N_CFG = 22
 
 # innovation channels recorded per node (NIS, NaN where none)
 K_WHEEL, K_REAR, K_FRONT, K_GNSS_VEL, K_GNSS_POS = range(5)
@@ -174,7 +175,9 @@ def run_nodes(
             robust_scalar(x, P, -r, h, cfg[C_GYRO_NOISE] ** 2, 1e300, ph0)
         elif math.isfinite(vw[k]):
             hv = wheel_speed(x, h)
-            d2, ok = robust_scalar(x, P, vw[k] - hv, h, cfg[C_WHEEL_SIGMA] ** 2, gate, ph0)
+            # wheel slip and rolling-radius changes are relative to the speed
+            sig_w = cfg[C_WHEEL_SIGMA] + cfg[C_WHEEL_REL] * abs(vw[k])
+            d2, ok = robust_scalar(x, P, vw[k] - hv, h, sig_w * sig_w, gate, ph0)
             nis[k, K_WHEEL] = d2
         # the axle relations' error is a model error correlated over C_AXLE_TAU seconds, not
         # white noise: their variance is quoted per C_AXLE_TAU and scaled by C_AXLE_TAU / dt,
