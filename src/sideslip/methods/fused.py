@@ -122,6 +122,7 @@ class FusedSettings:
     standstill_speed: float = 0.05  # m/s
     force_tau_s: float = 0.15  # s: low-pass of the measured axle forces (tyre relaxation)
     stiffness_curve_accel: float = 0.5  # m/s^2: an axle's stiffness learned beyond this force
+    filter_steady_jerk_m_s3: float = 2.0  # m/s^3: the filter only while it changes slower
     mu_utilisation: float = 0.5  # mu learned only where an axle uses this share of mu F_z
     mu_floor_sigma: float = 0.05  # 1-sigma of the constraint mu >= |a| / g where violated
     adapt_tau_s: float = 1.0  # s: adaptive axle-noise time constant
@@ -174,6 +175,14 @@ def _low_pass(t: FloatArray, x: FloatArray, tau: float) -> FloatArray:
         a = 1.0 - math.exp(-dt[k] / tau)
         y[k] = y[k - 1] + a * (x[k] - y[k - 1])
     return y
+
+
+def _backward_rate(t: FloatArray, x: FloatArray) -> FloatArray:
+    """Causal derivative (x_k - x_{k-1}) / (t_k - t_{k-1}), 0 at the first row."""
+    rate = np.zeros_like(x)
+    if x.size > 1:
+        rate[1:] = np.diff(x) / np.diff(t)
+    return rate
 
 
 def roll_gain(vehicle: Vehicle) -> float:
@@ -354,11 +363,16 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     geom, iz_m, notes = axle_geometry(vehicle)
     # axle forces per mass from the force and moment balance (seed 003 eqs 1-2)
     fy_lp = _low_pass(t, ay * (1.0 - G * k_phi), nz.force_tau_s)
-    r_dot = np.gradient(wz, t) if n > 1 else np.zeros(n)
+    r_dot = _backward_rate(t, wz)
     r_dot_lp = _low_pass(t, r_dot, nz.force_tau_s) if nz.yaw_acceleration else np.zeros(n)
     wb = geom[0] + geom[1]
     f_front = (geom[1] * fy_lp + iz_m * r_dot_lp) / wb
     f_rear = (geom[0] * fy_lp - iz_m * r_dot_lp) / wb
+    # the causal filter learns the stiffness in quasi-steady cornering only (the lateral force
+    # changing slower than filter_steady_jerk_m_s3); the smoother sees both sides of a
+    # transient and learns everywhere
+    jerk = _low_pass(t, _backward_rate(t, fy_lp), nz.force_tau_s)
+    steady = np.ones(n, dtype=bool) if smooth else np.abs(jerk) < nz.filter_steady_jerk_m_s3
     # the friction the road must at least have to transmit the measured acceleration
     mu_floor = np.hypot(_low_pass(t, ax, nz.force_tau_s), fy_lp) / G
     use_front = bool(nz.front_axle and "steer" in drive and np.isfinite(drive["steer"]).any())
@@ -388,7 +402,7 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     q = _process_psd(nx, nz)
     lever = np.array(vehicle.gnss_xyz, dtype=float)
     xs, var, cov_vxvy, nis, counts = eng.run_nodes(
-        tn, U, vw_n, f_front[idx], f_rear[idx], delta[idx], mu_floor[idx],
+        tn, U, vw_n, f_front[idx], f_rear[idx], delta[idx], mu_floor[idx], steady[idx],
         g_node, g_age, gn["gnss_e"][g_rows], gn["gnss_n"][g_rows], gn["pstd"][g_rows],
         gn["gnss_ve"][g_rows], gn["gnss_vn"][g_rows], gn["vstd"][g_rows],
         x0, P0, q, f_rows(nx), geom, lever, _config(nz, k_phi, calibrate, has_vel), smooth,

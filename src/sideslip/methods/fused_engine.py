@@ -104,6 +104,7 @@ def run_nodes(
     f_rear,
     delta,
     mu_floor,
+    steady,
     g_node,
     g_age,
     g_e,
@@ -187,8 +188,10 @@ def run_nodes(
             # ---- axle force relations (brush model): the tyres' word on the slip angles
             if math.isfinite(f_rear[k]):
                 hv = rear_axle_force(x, u, cfg[C_K_PHI], axle, h, dr)
-                if abs(f_rear[k]) < cfg[C_STIFF_CURVE]:
-                    h[ISR] = 0.0  # stiffness learned in curves only (errors in variables)
+                if abs(f_rear[k]) < cfg[C_STIFF_CURVE] or not steady[k]:
+                    # stiffness learned in steady curves only (errors in variables; at turn-in
+                    # and turn-out the tyres' relaxation lag would be taken for a soft tyre)
+                    h[ISR] = 0.0
                 if abs(f_rear[k]) < cfg[C_MU_UTIL] * max(x[IMU], 0.05) * axle[A_NR]:
                     h[IMU] = 0.0  # mu learned only near the limit (the curve's bend)
                 sig = cfg[C_FORCE_SIGMA] + cfg[C_FORCE_REL] * abs(f_rear[k])
@@ -199,7 +202,7 @@ def run_nodes(
                 infl_r = _adapt(infl_r, d2, dtk, cfg)
             if math.isfinite(f_front[k]) and math.isfinite(delta[k]):
                 hv = front_axle_force(x, u, delta[k], cfg[C_K_PHI], axle, h, dr)
-                if abs(f_front[k]) < cfg[C_STIFF_CURVE]:
+                if abs(f_front[k]) < cfg[C_STIFF_CURVE] or not steady[k]:
                     h[ISF] = 0.0
                 if abs(f_front[k]) < cfg[C_MU_UTIL] * max(x[IMU], 0.05) * axle[A_NF]:
                     h[IMU] = 0.0
