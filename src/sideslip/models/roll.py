@@ -58,8 +58,9 @@ def suspension_roll_steady(ay_m: ArrayLike, vehicle: Vehicle) -> FloatArray:
 
 
 @numba.njit(cache=True)
-def _roll_oscillator(t: NDArray, force: NDArray, inertia: float, damping: float,
-                     stiffness: float) -> NDArray:  # pragma: no cover - compiled
+def _roll_oscillator(
+    t: NDArray, force: NDArray, inertia: float, damping: float, stiffness: float
+) -> NDArray:  # pragma: no cover - compiled
     # Trapezoidal (Tustin) step of I phi'' + d phi' + k phi = force: A-stable for any dt.
     n = t.size
     out = np.zeros(n)
@@ -122,7 +123,7 @@ def suspension_roll(t: ArrayLike, ay_m: ArrayLike, vehicle: Vehicle) -> FloatArr
 
 def static_bank(ay_m: ArrayLike, r: ArrayLike, vx: ArrayLike) -> FloatArray:
     """Eq 46 in our sign: phi_ss = asin((a_ym - r v_x)/g), rad (valid when v_y' ~ 0)."""
-    s = (np.asarray(ay_m, dtype=float) - np.asarray(r, dtype=float) * np.asarray(vx, dtype=float))
+    s = np.asarray(ay_m, dtype=float) - np.asarray(r, dtype=float) * np.asarray(vx, dtype=float)
     return np.asarray(np.arcsin(np.clip(s / G, -1.0, 1.0)), dtype=float)
 
 
@@ -164,7 +165,7 @@ def tseng_gains(vx: ArrayLike, wheelbase: float, understeer_gradient: float) -> 
 
 def sin_roll_from_ay(ay_m: ArrayLike, delta: ArrayLike, gains: TsengGains) -> FloatArray:
     """Eq 55: sin(phi_ay) = (a_ym - H_delta->ay delta) / H_phi->ay, clipped to [-1, 1]."""
-    s = (np.asarray(ay_m, dtype=float) - gains.delta_ay * np.asarray(delta, dtype=float))
+    s = np.asarray(ay_m, dtype=float) - gains.delta_ay * np.asarray(delta, dtype=float)
     return np.clip(s / gains.phi_ay, -1.0, 1.0)
 
 
@@ -174,8 +175,9 @@ def sin_roll_from_r(r: ArrayLike, delta: ArrayLike, gains: TsengGains) -> FloatA
     return np.clip(s / gains.phi_r, -1.0, 1.0)
 
 
-def dynamic_factor(sin_ay: ArrayLike, sin_r: ArrayLike, sin_ss: ArrayLike, vx: ArrayLike,
-                   gains: TsengGains) -> FloatArray:
+def dynamic_factor(
+    sin_ay: ArrayLike, sin_r: ArrayLike, sin_ss: ArrayLike, vx: ArrayLike, gains: TsengGains
+) -> FloatArray:
     """Eq 57: DFC = H_phi->ay (sin phi_ay - sin phi_ss) + v_x H_phi->r (sin phi_r - sin phi_ss).
 
     In m/s^2; zero in a steady state, where the three roll estimates agree.

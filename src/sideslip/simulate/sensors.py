@@ -29,7 +29,11 @@ antenna at ``l_ant = vehicle.gnss_xyz`` (m from the CG, body axes).
   ``gnss_pos_tau_s``); multipath hits an epoch with probability ``gnss_multipath_prob``
   (large position jump, smaller velocity spike, for that epoch only); outages remove every
   GNSS row inside ``[t0, t1)``.  ``gnss_pos_std`` / ``gnss_vel_std`` report the nominal 1-sigma
-  per horizontal axis (a receiver does not know about its multipath).
+  per horizontal axis (a receiver does not know about its multipath).  Options for loggers
+  that differ from the vehicle file: ``gnss_doppler = False`` (positions only),
+  ``gnss_latency_s`` (each epoch reports the truth that long before its time stamp, rounded
+  to the table's step), ``gnss_lever_offset_x/y`` (the antenna is not where the vehicle
+  file says).  Their defaults leave every drive as it was.
 
 Scale factors are fractions: ``measured = (1 + scale_factor) * true + offset``; 0.02 is a 2 %
 error.  (Seed 000 writes ``V = SF V_can``, i.e. its SF is ``1 / (1 + scale_factor)``.)
@@ -119,6 +123,10 @@ class SensorConfig:
     gnss_multipath_pos_std: float = 8.0  # position jump per horizontal axis, m
     gnss_multipath_vel_std: float = 0.5  # velocity spike per horizontal axis, m/s
     gnss_outages: tuple[tuple[float, float], ...] = ()  # (t0, t1) windows without GNSS, s
+    gnss_doppler: bool = True  # False: positions only (no gnss_ve/vn/vu, no gnss_vel_std)
+    gnss_latency_s: float = 0.0  # each epoch reports the truth this long before its stamp, s
+    gnss_lever_offset_x: float = 0.0  # antenna sits this far ahead of the file's gnss_xyz, m
+    gnss_lever_offset_y: float = 0.0  # ... and this far to the left, m
 
     def __post_init__(self) -> None:
         for f in fields(self):
@@ -136,16 +144,20 @@ class SensorConfig:
                             f"SensorConfig.gnss_outages: expected (t0, t1) pairs in s with "
                             f"t0 < t1, got {window!r}"
                         )
-                object.__setattr__(
-                    self, "gnss_outages", tuple((float(a), float(b)) for a, b in value)
-                )
+                object.__setattr__(self, "gnss_outages", tuple((float(a), float(b)) for a, b in value))
                 continue
             if isinstance(value, bool):
                 continue
             if not math.isfinite(value):
                 raise ValueError(f"SensorConfig.{f.name} = {value!r}: expected a finite number")
-            signed = f.name in ("gyro_scale_factor", "wheel_scale_factor", "steer_offset",
-                                "steer_scale_factor")
+            signed = f.name in (
+                "gyro_scale_factor",
+                "wheel_scale_factor",
+                "steer_offset",
+                "steer_scale_factor",
+                "gnss_lever_offset_x",
+                "gnss_lever_offset_y",
+            )
             if not signed and value < 0:
                 raise ValueError(f"SensorConfig.{f.name} = {value!r}: expected a value >= 0")
         if self.gnss_multipath_prob > 1.0:
@@ -240,9 +252,7 @@ def _random_walk(rng: np.random.Generator, n: int, dt: FloatArray, sigma: float)
     return np.cumsum(steps, axis=0)
 
 
-def _gauss_markov(
-    rng: np.random.Generator, n: int, dt: float, tau: float, sigma: FloatArray
-) -> FloatArray:
+def _gauss_markov(rng: np.random.Generator, n: int, dt: float, tau: float, sigma: FloatArray) -> FloatArray:
     """(n, k) stationary first-order Gauss-Markov sequences with std ``sigma`` (k,)."""
     k = sigma.size
     if n == 0:
@@ -359,8 +369,7 @@ def steering(
     if not rows.size:
         return {}, drawn
     meas = (1.0 + scale) * truth.steer[rows] + offset
-    meas = _quantise(meas + rng.standard_normal(rows.size) * config.steer_noise_std,
-                     config.steer_resolution)
+    meas = _quantise(meas + rng.standard_normal(rows.size) * config.steer_noise_std, config.steer_resolution)
     col = np.full(truth.t.size, np.nan)
     col[rows] = meas
     return {"steer": col}, drawn
@@ -374,11 +383,18 @@ def gnss(
     epochs = sample_rows(truth.t, config.gnss_rate_hz)
     if not epochs.size:
         return {}, {"gnss_multipath_epochs": 0}
-    rot = body_to_enu(truth.yaw[epochs], truth.pitch[epochs], truth.roll[epochs])
+    # the truth an epoch reports: latency rounded to the table's step (rows before the stamp)
+    src = epochs
+    if config.gnss_latency_s > 0.0 and truth.t.size > 1:
+        lag_rows = round(config.gnss_latency_s / float(np.median(np.diff(truth.t))))
+        src = np.maximum(epochs - lag_rows, 0)
+    rot = body_to_enu(truth.yaw[src], truth.pitch[src], truth.roll[src])
     lever = np.asarray(vehicle.gnss_xyz, dtype=float)
-    omega = np.asarray(truth.omega_body, dtype=float)[epochs]
-    pos = np.column_stack([truth.e, truth.n, truth.u])[epochs] + rot @ lever
-    vel = cg_velocity_enu(truth)[epochs] + np.einsum("nij,nj->ni", rot, np.cross(omega, lever))
+    if config.gnss_lever_offset_x or config.gnss_lever_offset_y:
+        lever = lever + np.array([config.gnss_lever_offset_x, config.gnss_lever_offset_y, 0.0])
+    omega = np.asarray(truth.omega_body, dtype=float)[src]
+    pos = np.column_stack([truth.e, truth.n, truth.u])[src] + rot @ lever
+    vel = cg_velocity_enu(truth)[src] + np.einsum("nij,nj->ni", rot, np.cross(omega, lever))
 
     m = epochs.size
     sigma_gm = np.array([config.gnss_pos_gm_std, config.gnss_pos_gm_std, config.gnss_pos_gm_std_up])
@@ -407,6 +423,9 @@ def gnss(
     pos_std = math.hypot(config.gnss_pos_gm_std, config.gnss_pos_noise_std)
     cols["gnss_pos_std"] = np.where(np.isfinite(cols["gnss_e"]), pos_std, np.nan)
     cols["gnss_vel_std"] = np.where(np.isfinite(cols["gnss_e"]), config.gnss_vel_std, np.nan)
+    if not config.gnss_doppler:
+        for name in ("gnss_ve", "gnss_vn", "gnss_vu", "gnss_vel_std"):
+            del cols[name]
     drawn = {
         "gnss_multipath_epochs": int((hit & keep).sum()),
         "gnss_multipath_t": truth.t[epochs[hit & keep]].round(6).tolist()[:1000],

@@ -1,0 +1,108 @@
+"""The fused estimator on every sensor subset: no GNSS, GNSS positions only (with a latency and
+a lever arm the vehicle file does not state), and the real Stanford Revs lap (no GNSS)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from sideslip.drive import Drive, drive_from_columns
+from sideslip.evaluate import metrics
+from sideslip.methods.registry import all_methods, run_method, why_not
+from sideslip.simulate import simulate
+from sideslip.simulate.scenarios import SCENARIOS
+from sideslip.simulate.sensors import SensorConfig
+from sideslip.vehicle import Vehicle, load_vehicle
+from tests.conftest import sim_drive
+from tests.helpers import SHARED_DATA
+from tests.methods.test_fused import beta_rmse_all, two_sigma_share
+
+OURS = {"fused", "fused_filter"}
+REVS = SHARED_DATA / "revs_250lm_20140222" / "20140222_01_01_03_250lm"
+
+
+def _without_gnss(drive: Drive) -> Drive:
+    cols = {"t": drive.t, **{k: v for k, v in drive.data.items() if not k.startswith("gnss_")}}
+    return drive_from_columns(cols, dict(drive.meta))
+
+
+@pytest.mark.parametrize("scenario", ["slalom_low_mu", "race_lap"])
+def test_without_gnss_fused_runs_and_matches_the_best_paper_method(scenario):
+    """IMU + wheel speeds + steering only: fused runs, lists its cues, gives no heading or
+    position (not observable), and is within 10 % of the best paper method the same columns
+    allow, or better, at the limit (measured: slalom on mu 0.25 0.076 vs fg_batch 0.075;
+    race_lap 0.58 vs 0.73).  Where steering leads the motion the steering models stay ahead
+    (dlc_bank 0.19 vs fg_batch 0.12, step_steer 0.22 vs 0.014, cr_slalom 0.125 vs
+    obs_modified_nocomp 0.096): fused's front-axle relation is left off by default (see
+    FusedSettings.front_axle)."""
+    drive = _without_gnss(sim_drive(scenario))
+    vehicle = load_vehicle(drive.meta["vehicle"])
+    assert why_not(all_methods()["fused"], drive, vehicle) is None
+    est = run_method("fused", drive, vehicle)
+    assert "gnss_doppler" not in est.params["cues"] and "gnss_position" not in est.params["cues"]
+    assert "yaw" not in est.series and "e" not in est.series
+    rmse = beta_rmse_all(drive, vehicle)
+    others = {k: v for k, v in rmse.items() if k not in OURS}
+    best = min(others, key=others.get)
+    assert rmse["fused"] <= 1.1 * others[best], (rmse["fused"], best, others[best])
+
+
+def test_positions_only_gnss_with_latency_and_unstated_lever_arm():
+    """A 20 Hz receiver without Doppler, 50 ms late, its antenna 0.5 m ahead of where the vehicle
+    file says, on the double lane change: fused uses the positions (cue listed), stays within
+    20 % of the best method (measured 0.14 vs fg_batch 0.12 deg: fused's heading now rests on
+    differenced positions, fg_batch never uses GNSS) and keeps >= 85 % of errors inside 2 sigma
+    (measured 0.88)."""
+    cfg = (
+        SensorConfig()
+        .with_overrides(SCENARIOS["dlc_bank"].sensor_overrides)
+        .with_overrides(
+            {"gnss_rate_hz": 20.0, "gnss_doppler": False, "gnss_latency_s": 0.05, "gnss_lever_offset_x": 0.5}
+        )
+    )
+    drive = simulate("dlc_bank", seed=0, config=cfg)
+    assert "gnss_ve" not in drive and "gnss_e" in drive
+    vehicle = load_vehicle(drive.meta["vehicle"])
+    est = run_method("fused", drive, vehicle)
+    assert "gnss_position" in est.params["cues"] and "gnss_doppler" not in est.params["cues"]
+    rmse = beta_rmse_all(drive, vehicle)
+    others = {k: v for k, v in rmse.items() if k not in OURS}
+    best = min(others, key=others.get)
+    assert rmse["fused"] <= 1.2 * others[best], (rmse["fused"], best, others[best])
+    assert two_sigma_share(drive, est) >= 0.85
+
+
+def _revs() -> tuple[Drive, Vehicle]:
+    def col(name: str) -> np.ndarray:
+        return np.loadtxt(REVS / f"{name}.txt")
+
+    vx = col("vx")
+    cols = {
+        "t": col("t"), "wz": col("yawRate"), "ay": col("ayCG"), "ax": col("axCG"),
+        "v_can": vx, "steer": col("delta"), "ref_beta": col("beta_true"), "ref_vx": vx,
+        "ref_vy": col("vy"), "ref_r": col("yawRate"),
+    }  # fmt: skip
+    # DATA_NOTES.md: the paper authors' vehicle (m, l_f, l_r, J_z, C_f, C_r per axle)
+    vehicle = Vehicle(
+        name="revs_250lm", source="DATA_NOTES.md", mass=982.0, lf=1.33, lr=1.07,
+        yaw_inertia=1605.0, cf=0.7e5, cr=1.2e5,
+    )  # fmt: skip
+    return drive_from_columns(cols, {"vehicle": "revs_250lm"}), vehicle
+
+
+@pytest.mark.realdata
+def test_revs_lap_without_gnss_beats_the_papers_factor_graph():
+    """The real Ferrari 250 LM lap (beta to 5.5 deg, |a_y| to 16.6 m/s^2, no GNSS): the paper's
+    factor graph reports 0.57 deg, beta = 0 scores 1.69.  fused (IMU yaw rate, a_y, INS speed;
+    the vehicle file's tyres, brush model with mu and stiffness identified) must stay under
+    0.5 deg and beat every registered method that can run here (measured 0.46 deg vs
+    obs_bicycle 0.60, fg_batch 1.09), with >= 85 % of errors inside 2 sigma (measured 0.90)."""
+    if not REVS.exists():
+        pytest.skip(f"real data absent: {REVS} (../shared/data is not shipped with the repo)")
+    drive, vehicle = _revs()
+    est = run_method("fused", drive, vehicle)
+    rmse = metrics(drive, est.series)["beta_rmse_deg"]
+    assert rmse < 0.5
+    others = {k: v for k, v in beta_rmse_all(drive, vehicle).items() if k not in OURS}
+    assert rmse < min(others.values()), others
+    assert two_sigma_share(drive, est) >= 0.85

@@ -1,0 +1,47 @@
+"""The brush (Fiala) axle-force model against its closed-form properties."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from sideslip.models.axle_force import fiala_force, lateral_force, sliding_slip_angle
+
+C, F = 60.0, 5.0  # m/s^2 per unit tan(alpha), m/s^2: a rear axle of a mid-size car on dry road
+
+
+def test_linear_at_small_slip_and_saturated_beyond_sliding():
+    """Pacejka 2012 eq 3.14: slope C at zero slip; F_y = mu F_z from alpha_sl = atan(3F/C) on,
+    with both signs (odd function)."""
+    z = 1e-5
+    assert fiala_force(z, C, F)[0] == pytest.approx(C * z, rel=1e-4)
+    a_sl = sliding_slip_angle(C, F)
+    for alpha in (a_sl, 1.2 * a_sl, 0.5):
+        assert fiala_force(math.tan(alpha), C, F)[0] == pytest.approx(F)
+        assert fiala_force(-math.tan(alpha), C, F)[0] == pytest.approx(-F)
+    assert lateral_force(np.array([-0.3, 0.3]), C, F) == pytest.approx([-F, F])
+
+
+def test_slope_is_c_times_one_minus_utilisation_squared():
+    """dF/dz = C (1 - |z| / z_sl)^2 (module docstring), checked at half the sliding slip."""
+    z_sl = 3 * F / C
+    assert fiala_force(0.5 * z_sl, C, F)[1] == pytest.approx(C * 0.25)
+
+
+@pytest.mark.parametrize("z", [-0.3, -0.2, -0.05, 0.01, 0.1, 0.2, 0.24])
+def test_derivatives_match_central_differences(z):
+    """The three analytic partials against central differences (step 1e-6; the curve is C^1,
+    so the error is O(step^2) relative, well inside 1e-6)."""
+    _, dz, dc, df = fiala_force(z, C, F)
+    h = 1e-6
+    assert dz == pytest.approx(
+        (fiala_force(z + h, C, F)[0] - fiala_force(z - h, C, F)[0]) / (2 * h), rel=1e-5, abs=1e-6
+    )
+    assert dc == pytest.approx(
+        (fiala_force(z, C + h, F)[0] - fiala_force(z, C - h, F)[0]) / (2 * h), rel=1e-5, abs=1e-6
+    )
+    assert df == pytest.approx(
+        (fiala_force(z, C, F + h)[0] - fiala_force(z, C, F - h)[0]) / (2 * h), rel=1e-5, abs=1e-6
+    )
