@@ -23,13 +23,8 @@ from sideslip.vehicle import load_vehicle
 from tests.fuzz.common import DATA_COLUMNS, LIMIT_OF, SCALE, count, fuzz_settings
 
 SENSORS = [c for c in DATA_COLUMNS if not c.startswith("ref_")]
-# method -> the failure seen on this branch, handed to the method's owner.  Checked per case
-# (not a strict xfail) because the owner's branch already fixes it, so after the merge the
-# method must pass and this entry goes.
-KNOWN = {
-    m: f"{m}: KeyError 'gnss_n' on a drive with gnss_e but no gnss_n (fixed on branch 'fused')"
-    for m in ("fused", "fused_filter")
-}
+# method -> a known failure handed to the method's owner (none at present)
+KNOWN: dict[str, str] = {}
 
 
 @st.composite

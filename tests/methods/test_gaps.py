@@ -65,19 +65,10 @@ GAPS: dict[str, Gap] = {
 }
 # (gap, method) -> reason: known failures handed to the method's owner (none at present)
 KNOWN: dict[tuple[str, str], str] = {}
-# (gap, method) -> reason: health that stays 0 over the gap, seen when this branch was tried
-# with the branches that add `health` (fg, fused, kcore; 2026-12-01).  The health there comes
-# from innovation consistency (NIS), which cannot see information that is missing: a coasting
-# filter fits its few measurements well.  Handed to the owners; checked imperatively because
-# the methods on this branch have no health series yet (a strict xfail would pass here).
-UNFLAGGED_HEALTH: dict[tuple[str, str], str] = {
-    **{("wheel_lock", m): f"{m}: health stays 0 while all wheel speeds read 0 at speed"
-       for m in ("fused", "fused_filter", "kkf")},
-    **{("dropout_10s", m): f"{m}: health stays 0 through a 10 s IMU and wheel-speed dropout"
-       for m in ("fg_batch", "fg_lag", "kf_linear", "mkf", "mkf_adaptive")},
-    **{("clock_jump", m): f"{m}: health stays 0 after the clock jumps an hour ahead"
-       for m in ("fg_batch", "fg_lag", "kf_linear", "kkf", "mkf", "mkf_adaptive")},
-}
+# (gap, method) -> reason: health that stays 0 over the gap.  None at present: the methods'
+# own health (NIS) cannot see missing information, so run_method adds the input health of
+# sideslip.input_health (dropouts, clock jumps, implausible wheel speeds) to every estimate.
+UNFLAGGED_HEALTH: dict[tuple[str, str], str] = {}
 
 
 def _params():

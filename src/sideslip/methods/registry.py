@@ -179,7 +179,52 @@ def run_method(method: str | Method, drive: Drive, vehicle: Vehicle, settings: A
         if settings is not None:
             est_params.setdefault("settings", settings_dict(settings))
         est = Estimate(method.name, est.t, est.series, est_params, est.innovations)
+    est = _with_input_health(method, drive, est)
     check_estimate(est, len(drive))
     if not np.array_equal(est.t, drive.t):
         raise RuntimeError(f"method {method.name}: estimate is not on the drive's time base")
     return est
+
+
+def columns_used(method: Method, drive: Drive) -> list[str]:
+    """The drive columns behind ``method``'s requirements (first present alternative each)."""
+    used = []
+    for need in method.columns:
+        if isinstance(need, str):
+            if need in drive:
+                used.append(need)
+        else:
+            alts = need
+            present = [a for a in alts if a in drive]
+            if set(alts) >= set(SPEED):
+                used.extend(present)  # every wheel/CAN speed present feeds the speed signal
+            elif present:
+                used.append(present[0])
+    return used
+
+
+def _with_input_health(method: Method, drive: Drive, est: Estimate) -> Estimate:
+    """Combine the method's own ``health`` with :func:`sideslip.input_health.input_health`
+    (dropouts, clock jumps, implausible wheel speeds): the larger wins, per row."""
+    from sideslip.input_health import input_health
+    from sideslip.signals import wheel_speed
+
+    used = columns_used(method, drive)
+    speed = None
+    if any(c in SPEED for c in used):
+        speed = wheel_speed(drive)
+        if speed is None and "v_can" in drive:
+            speed = drive["v_can"]
+    h_in = input_health(drive, used, speed)
+    own = est.series.get("health")
+    if own is None and not h_in.any():
+        return est
+    health = h_in if own is None else np.maximum(np.asarray(own, dtype=float), h_in)
+    series = {**est.series, "health": health}
+    params = dict(est.params)
+    params["input_health"] = {
+        "criterion": "inputs: dropouts of IMU/speed/steering, clock jumps, implausible wheel speeds",
+        "flagged_share": float(np.mean(h_in > 0)),
+        "columns_checked": used,
+    }
+    return Estimate(est.method, est.t, series, params, est.innovations)
