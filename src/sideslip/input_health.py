@@ -15,9 +15,10 @@ method's own health (the larger of the two wins):
   linearly), the time a filter needs to re-converge;
 * **implausible wheel speed**: the speed the method reads changes faster than any road vehicle
   can accelerate or brake (``|dv| > 1.5 g dt + 0.5 m/s`` over spans of at least 0.1 s;
-  tyre-road friction limits the body to about 1.2 g) — a locked or spinning wheel, a CAN glitch.  From that sample on, the row
-  stays flagged until the speed again agrees with the accelerometer-integrated speed from the
-  last trusted sample (within ``1 m/s + 10 %``), at most ``max_event_s``.
+  tyre-road friction limits the body to about 1.2 g): a locked or spinning wheel, a CAN
+  glitch.  From that sample on, the row stays flagged until the speed again agrees with the
+  accelerometer-integrated speed from the last trusted sample (within ``1 m/s + 10 %``), at
+  most ``MAX_EVENT_S``.
 
 All vectorised (O(N)) except the short forward scan of each wheel-speed event.
 """
