@@ -191,31 +191,43 @@ def predict_nb(x: NDArray, P: NDArray, F: NDArray, Q: NDArray, Gu: NDArray) -> N
 
 @numba.njit(cache=True)
 def predict_sparse_nb(x: NDArray, P: NDArray, x_next: NDArray, F: NDArray, Q: NDArray) -> None:
-    """In place: ``x <- x_next``, ``P <- F P F' + Q`` skipping the zero entries of ``F``.
+    """In place: ``x <- x_next``, ``P <- F P F' + Q`` for a Jacobian close to the identity.
 
     For the Jacobian of a nonlinear process model (``x_next = f(x, u, dt)`` computed by the
-    model), which is mostly the identity: the cost is O(n^2 + nnz(F) n) instead of O(n^3).
+    model), which is mostly the identity: with F = I + D and D sparse,
+    F P F' = A + A D' with A = P + D P, so the cost is O(n^2 + nnz(D) n) instead of O(n^3).
     """
     n = x.size
-    A = np.zeros((n, n))  # A = F P
+    rows = np.empty(n * n, dtype=np.int64)
+    cols = np.empty(n * n, dtype=np.int64)
+    vals = np.empty(n * n)
+    nnz = 0
     for i in range(n):
         for k in range(n):
-            f = F[i, k]
-            if f != 0.0:
-                for j in range(n):
-                    A[i, j] += f * P[k, j]
+            d = F[i, k] - 1.0 if i == k else F[i, k]
+            if d != 0.0:
+                rows[nnz] = i
+                cols[nnz] = k
+                vals[nnz] = d
+                nnz += 1
+    A = P.copy()  # A = P + D P
+    for e in range(nnz):
+        i, k, d = rows[e], cols[e], vals[e]
+        for j in range(n):
+            A[i, j] += d * P[k, j]
+    for i in range(n):  # P = A + A D' + Q
+        for j in range(n):
+            P[i, j] = A[i, j] + Q[i, j]
+    for e in range(nnz):
+        j, k, d = rows[e], cols[e], vals[e]
+        for i in range(n):
+            P[i, j] += A[i, k] * d
     for i in range(n):
-        for j in range(i, n):
-            acc = Q[i, j]
-            for k in range(n):
-                f = F[j, k]
-                if f != 0.0:
-                    acc += A[i, k] * f
-            P[i, j] = acc
-    for i in range(n):
-        for j in range(i):
-            P[i, j] = P[j, i]
         x[i] = x_next[i]
+        for j in range(i + 1, n):
+            m = 0.5 * (P[i, j] + P[j, i])
+            P[i, j] = m
+            P[j, i] = m
 
 
 @numba.njit(cache=True)
@@ -225,18 +237,20 @@ def update_scalar_nb(
     """In place Joseph-form update with one scalar measurement; returns S = h P h' + r.
 
     ``innov`` is ``z - h x`` computed by the caller (so that angle measurements can be wrapped
-    to [-pi, pi) first).  The covariance is the Joseph product (I - k h) P (I - k h)' + r k k'
-    with k = P h' / S, formed as two rank-one products (M = P - k (P h')', then
-    P = M - (M h') k' + r k k'), O(n^2) and positive semi-definite under round-off for any
-    gain.  A non-positive S (no information, or a broken prior) leaves x and P unchanged.
+    to [-pi, pi) first).  The covariance is the Joseph product
+    (I - k h) P (I - k h)' + r k k' with k = P h' / S, which for a symmetric P expands to
+    P - k (Ph)' - (Ph) k' + S k k' for any gain k (Simon 2006, eq 5.19); it is evaluated
+    elementwise on the upper triangle and mirrored, so P stays exactly symmetric, in O(n^2),
+    skipping the zero entries of ``h``.  A non-positive S (no information, or a broken
+    prior) leaves x and P unchanged.
     """
     n = x.size
-    ph = np.empty(n)
-    for i in range(n):
-        acc = 0.0
-        for j in range(n):
-            acc += P[i, j] * h[j]
-        ph[i] = acc
+    ph = np.zeros(n)
+    for j in range(n):
+        hj = h[j]
+        if hj != 0.0:
+            for i in range(n):
+                ph[i] += P[i, j] * hj
     s = r
     for i in range(n):
         s += h[i] * ph[i]
@@ -245,26 +259,12 @@ def update_scalar_nb(
     k = ph / s
     for i in range(n):
         x[i] += k[i] * innov
-    # M = (I - k h) P = P - k ph'   (P symmetric)
-    M = np.empty((n, n))
     for i in range(n):
-        for j in range(n):
-            M[i, j] = P[i, j] - k[i] * ph[j]
-    # P = M (I - k h)' + r k k' = M - (M h) k' + r k k'
-    mh = np.empty(n)
-    for i in range(n):
-        acc = 0.0
-        for j in range(n):
-            acc += M[i, j] * h[j]
-        mh[i] = acc
-    for i in range(n):
+        ki, phi = k[i], ph[i]
         for j in range(i, n):
-            a = M[i, j] - mh[i] * k[j] + r * k[i] * k[j]
-            b = M[j, i] - mh[j] * k[i] + r * k[j] * k[i]
-            P[i, j] = 0.5 * (a + b)
-    for i in range(n):
-        for j in range(i):
-            P[i, j] = P[j, i]
+            m = P[i, j] - ki * ph[j] - phi * k[j] + s * ki * k[j]
+            P[i, j] = m
+            P[j, i] = m
     return s
 
 
