@@ -181,3 +181,39 @@ def white_noise_sigma_100hz(t: FloatArray, x: FloatArray, max_dt: float = 0.05) 
     mad = float(np.median(np.abs(d2 - np.median(d2))))
     sigma = 1.4826 * mad / np.sqrt(6.0)
     return float(sigma * np.sqrt(step / 0.01))
+
+
+def causal_mean(t: FloatArray, x: FloatArray, window_s: float) -> FloatArray:
+    """Causal moving mean over ``window_s`` of the finite samples (0 where none yet)."""
+    v = np.where(np.isfinite(x), x, 0.0)
+    c = np.isfinite(x).astype(float)
+    cv = np.concatenate(([0.0], np.cumsum(v)))
+    cc = np.concatenate(([0.0], np.cumsum(c)))
+    j = np.searchsorted(t, t - window_s, side="right")
+    i = np.arange(t.size) + 1
+    cnt = cc[i] - cc[j]
+    return np.asarray(np.where(cnt > 0, (cv[i] - cv[j]) / np.maximum(cnt, 1.0), 0.0), dtype=float)
+
+
+GRAVITY_M_S2 = 9.80665
+
+
+def gravity_lateral_sin(
+    drive: Drive, speed: FloatArray, yaw_rate: FloatArray, window_s: float = 2.0
+) -> FloatArray | None:
+    """|sin| of the body's total roll against gravity (road bank + suspension roll), per row,
+    from the accelerometer: the lateral specific force a_y minus the kinematic lateral
+    acceleration V r is g sin(roll + bank) (plus V beta', small over ``window_s``, over which
+    both are averaged causally).  ``yaw_rate``: bias-corrected r (rad/s) per row, e.g. a
+    filter's estimate (a raw gyro's bias times V would swamp the cue).  None when the drive
+    has no ``ay``.
+
+    An independent cue of the gravity component that a flat-road vehicle model ignores; on a
+    flat road it is the suspension roll (~ roll gradient * a_y) only.
+    """
+    if "ay" not in drive:
+        return None
+    t = drive.t
+    ay, _ = hold(drive["ay"], t)
+    diff = causal_mean(t, ay - np.abs(speed) * yaw_rate, window_s)
+    return np.asarray(np.clip(np.abs(diff) / GRAVITY_M_S2, 0.0, 1.0), dtype=float)

@@ -21,7 +21,7 @@ from sideslip.drive import Drive, drive_from_columns
 from sideslip.errors import InputError
 from sideslip.evaluate import Window, window_errors
 from sideslip.methods.ekf_filter import GNSS_REJECTED
-from sideslip.methods.ekf_positioning import EkfResult, run_ekf
+from sideslip.methods.ekf_positioning import EkfResult, EkfTuning, run_ekf
 from sideslip.methods.registry import all_methods, run_method
 from sideslip.models.kinematic import steer_yaw_rate
 from sideslip.models.kinematic_ekf import BD, DW, KD, KU, SW, E, N
@@ -376,3 +376,25 @@ def test_a_vehicle_file_without_track_runs_and_says_what_it_assumed() -> None:
     assert metrics(drive, est.series)["pos_rmse_m"] < 3.0
     front_only = v.with_changes(track_rear=math.nan)
     assert run_method(method, drive, front_only).params["track_rear_m"] == v.track_front
+
+
+def test_ekf_tuning_is_a_validated_frozen_dataclass_reached_by_name() -> None:
+    import dataclasses
+
+    with pytest.raises(ValueError, match=r"EkfTuning.gnss_tau_s = 0.0: expected > 0 s"):
+        EkfTuning(gnss_tau_s=0.0)
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        EkfTuning().wheel_sigma_m_s = 1.0  # type: ignore[misc]
+    drive = sim_drive("suburban_outages", 0)
+    est = run_method(all_methods()["ekf_wss_sas"], drive, SEDAN, {"gnss_tau_s": 30.0})
+    assert est.params["settings"]["gnss_tau_s"] == 30.0
+    # identified parameters: measured / true scales with their 1-sigma, units in the names;
+    # the rear tyres' 0.5 % radius errors within 0.4 % (as the state test above)
+    true = drive.meta["truth_sensor"]["wheel_scale_factor"]  # [FL, FR, RL, RR]
+    assert est.params["wheel_speed_scale"] == pytest.approx(1.0 + 0.5 * (true[2] + true[3]),
+                                                            abs=0.004)  # fmt: skip
+    assert est.params["wheel_speed_scale_sigma"] > 0.0
+    assert {"steer_scale", "steer_offset_rad", "understeer_gradient_rad_m_s2_sigma"} <= set(
+        est.params)
+    assert est.series["health"].shape == drive.t.shape
+    assert np.isfinite(est.innovations["gnss_nis"]).sum() > 100

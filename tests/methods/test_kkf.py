@@ -6,8 +6,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 
-from sideslip.methods.kkf import kkf, run_kkf, straight_flags
+from sideslip.methods.kkf import KkfSettings, kkf, run_kkf, straight_flags
 from sideslip.methods.registry import all_methods, run_method
 from sideslip.vehicle import load_vehicle
 from tests.conftest import sim_drive
@@ -94,3 +95,25 @@ def test_kkf_learns_a_raw_phone_gyro_bias_of_several_degrees_per_second() -> Non
     err = np.angle(np.exp(1j * (est["yaw"][late] - drive["ref_yaw"][late])))
     assert math.degrees(np.max(np.abs(err))) < 0.5
     assert abs(math.degrees(est["gyro_bias"][-1] - true_bias)) < 0.05
+
+
+def test_kkf_settings_validate_and_reach_the_filter() -> None:
+    with pytest.raises(ValueError, match=r"KkfSettings.straight_on_rad_s = 0.05: expected > 0"):
+        KkfSettings(straight_on_rad_s=0.05, straight_off_rad_s=0.02)
+    d = linear_drive()
+    est = run_method("kkf", d, BLAZER, {"straight_hold_s": 3.0})
+    assert est.params["straight_hold_s"] == 3.0
+    assert est.params["settings"]["straight_hold_s"] == 3.0
+
+
+@pytest.mark.parametrize("scenario", ["two_turns_gyro_sf", "banked_turn", "dlc_bank"])
+def test_kkf_beta_std_covers_the_scale_factor_and_bank_errors(scenario: str) -> None:
+    """The KKF's beta error in turns is integrated gyro error (scale factor, tilt on a bank)
+    and the crab of a banked straight; its beta_std now carries them: >= 0.90 of the errors
+    inside 2 sigma (before issue 14: 0.59, 0.40, 0.48)."""
+    d = sim_drive(scenario, 0)
+    est = run_method("kkf", d, load_vehicle(d.meta["vehicle"]))
+    fast = d["ref_vx"] > 5.0
+    err = np.abs(np.angle(np.exp(1j * (est["beta"] - d["ref_beta"]))))[fast]
+    assert np.mean(err < 2 * est["beta_std"][fast]) >= 0.90
+    assert est.innovations["course_nis"].shape == d.t.shape

@@ -299,8 +299,7 @@ def ekf_loop(
             j_b = -1.0 / k1
             var_dc = (j_k * j_k * P[KD, KD] + 2.0 * j_k * j_b * P[KD, BD] + j_b * j_b * P[BD, BD]
                       + tu.steer_sigma_rad**2)
-            slip = c.slip_gain * abs(x[V] * x[R])
-            beta_var[k] = dbeta * dbeta * var_dc + slip * slip
+            beta_var[k] = dbeta * dbeta * var_dc  # the slip term is added by the caller
         else:
             beta_var[k] = (c.lr / L * 0.5) ** 2  # no steering yet: +-0.5 rad of road wheel
     return xs, vs, cov_en, beta, beta_var, flags, nis_steer, nis_gyro, nis_gnss

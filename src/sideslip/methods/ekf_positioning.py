@@ -149,11 +149,12 @@ from sideslip.models.kinematic_ekf import (
     V,
 )
 from sideslip.settings import settings_dict
-from sideslip.signals import white_noise_sigma_100hz
+from sideslip.signals import causal_mean, gravity_lateral_sin, white_noise_sigma_100hz
 from sideslip.vehicle import G, Vehicle
 
 FloatArray = NDArray[np.float64]
 
+SLIP_WINDOW_S = 2.0  # s: RMS window of the slip term of beta_std
 CHI2_2DOF_999 = 13.815510557964274  # 99.9 % quantile of chi-square with 2 degrees of freedom
 
 
@@ -376,6 +377,19 @@ def _estimate(
         cons = nis_consistency(t, nis_sum, dof, window_s=tu.consistency_window_s)
         inflation, health, health_params = cons.inflation, cons.health, cons.summary(t)
     k = np.sqrt(inflation)
+    # road bank: the car crabs by k_slip g sin(bank) on a bank while the driver holds
+    # delta = K_us g sin(bank) (read by eq 2.3 as lr/L delta of sideslip); the bank from the
+    # accelerometer when the drive has ay, else the typical road bank of the tuning
+    cue = gravity_lateral_sin(drive, x[:, V], x[:, R])
+    sin_bank = np.full(t.size, tu.road_bank_sigma) if cue is None else np.hypot(0.01, cue)
+    _, _, slip_gain = _vehicle_model_numbers(vehicle, tu)
+    lr_l = vehicle.lr / vehicle.wheelbase
+    bank_beta = (slip_gain + lr_l * np.abs(x[:, KU])) * G * sin_bank
+    # the kinematic model's own error, the rear-axle slip angle ~ k_slip |a_y| (a_y ~ v r),
+    # at least its RMS over the last SLIP_WINDOW_S (transients shift its phase)
+    ay = x[:, V] * x[:, R]
+    slip = slip_gain * np.maximum(np.abs(ay), np.sqrt(causal_mean(t, ay**2, SLIP_WINDOW_S)))
+    beta_std = np.sqrt(np.maximum(res.beta_var, 0.0) * inflation + slip**2 + bank_beta**2)
     series = {
         "e": x[:, E],
         "n": x[:, N],
@@ -387,7 +401,7 @@ def _estimate(
         "e_std": sd[:, E] * k,
         "n_std": sd[:, N] * k,
         "yaw_std": sd[:, PSI] * k,
-        "beta_std": np.sqrt(np.maximum(res.beta_var, 0.0)) * k,
+        "beta_std": beta_std,
         "vx_std": sd[:, V],
         "r_std": sd[:, R] * k,
         "health": health,

@@ -22,9 +22,14 @@ further noise values, so there is no "paper" preset.
 
 Honest uncertainty: the KKF's beta error in a turn is the heading error integrated from the gyro
 (scale factor times the heading change since the last straight, plus bias drift), which the
-filter's own P (white gyro noise only) does not contain.  ``beta_std`` therefore adds the
+filter's own P (white gyro noise only) does not contain.  ``beta_std`` therefore adds (i) the
 heading change since the last course update on a straight times ``gyro_scale_rel_sigma``
-(a MEMS gyro's scale-factor uncertainty, 1-sigma), and the windowed NIS of the course updates
+(a MEMS gyro's scale-factor uncertainty, 1-sigma); (ii) the sideslip a banked straight
+hides in the heading, k_slip g sin(bank) (k_slip from the vehicle file or
+:mod:`sideslip.typical`); (iii) the body-z gyro's under-reading on a bank, the heading change
+times 1/cos(bank) - 1; the bank comes from the accelerometer
+(:func:`sideslip.signals.gravity_lateral_sin`) when the drive has ``ay``, else
+``road_bank_sigma``.  The windowed NIS of the course updates
 (:func:`sideslip.filters.consistency.nis_consistency`) inflates it where the straights stop
 looking straight.
 
@@ -43,7 +48,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from sideslip import gnss
+from sideslip import gnss, typical
 from sideslip.drive import Drive
 from sideslip.estimate import Estimate
 from sideslip.filters.consistency import nis_consistency
@@ -62,7 +67,9 @@ from sideslip.methods.registry import SPEED, register
 from sideslip.models.mkf_model import V_GATE
 from sideslip.settings import settings_dict
 from sideslip.signals import (
+    GRAVITY_M_S2,
     STANDSTILL_SPEED,
+    gravity_lateral_sin,
     hold,
     sample_variance,
     vehicle_speed,
@@ -96,6 +103,8 @@ class KkfSettings:
     gyro_bias_psd_rad2_s3 : (rad/s)^2/s, bias random-walk density.
     gyro_scale_rel_sigma : 1-sigma of the gyro scale factor (measured/true - 1) behind the
         turn term of beta_std; 0 turns it off.
+    road_bank_sigma : sin of the road bank, 1-sigma, behind the bank terms of beta_std when
+        the drive has no ``ay`` (with ``ay`` the bank is taken from the accelerometer).
     straight_on_rad_s, straight_off_rad_s, straight_hold_s : straight detector.
     v_gate_m_s : m/s, course used above this speed only.
     consistency_window_s : s, window of the NIS test of the course updates (0: off).
@@ -105,6 +114,7 @@ class KkfSettings:
     gyro_sigma_100hz_rad_s: float | None = None
     gyro_bias_psd_rad2_s3: float = Q_BIAS
     gyro_scale_rel_sigma: float = 0.01
+    road_bank_sigma: float = 0.03
     straight_on_rad_s: float = STRAIGHT_ON
     straight_off_rad_s: float = STRAIGHT_OFF
     straight_hold_s: float = STRAIGHT_HOLD_S
@@ -117,7 +127,8 @@ class KkfSettings:
         g = self.gyro_sigma_100hz_rad_s
         if g is not None and not (math.isfinite(g) and g > 0):
             raise ValueError(f"KkfSettings.gyro_sigma_100hz_rad_s = {g}: expected a number > 0")
-        for name in ("gyro_bias_psd_rad2_s3", "gyro_scale_rel_sigma", "straight_hold_s",
+        for name in ("gyro_bias_psd_rad2_s3", "gyro_scale_rel_sigma", "road_bank_sigma",
+                     "straight_hold_s",
                      "consistency_window_s"):  # fmt: skip
             v = getattr(self, name)
             if not (math.isfinite(v) and v >= 0):
@@ -138,7 +149,10 @@ def kkf_gyro_sigma(drive: Drive, settings: KkfSettings) -> tuple[float, str]:
     if settings.preset == "auto":
         ident = white_noise_sigma_100hz(drive.t, drive["wz"])
         if ident is not None:
-            return max(ident, 0.1 * SIGMA_GYRO_100HZ), "drive (second differences of wz)"
+            # the heading's process noise must cover every gyro error between two straights
+            # (bias instability, scale times r), of which the white noise is a lower bound:
+            # the drive raises the typical value for a noisy gyro, never lowers it
+            return max(ident, SIGMA_GYRO_100HZ), "drive (second differences of wz), >= typical"
     return SIGMA_GYRO_100HZ, "typical"
 
 
@@ -334,6 +348,7 @@ class KkfResult:
     beta_fresh: NDArray[np.bool_]
     innov: FloatArray
     S: FloatArray
+    beta_std_filter: FloatArray  # eq 6 from the filter's own P (no model-error terms)
 
 
 def run_kkf(
@@ -369,19 +384,33 @@ def run_kkf(
     fresh = np.isfinite(course)
     beta_f = np.where(fresh, wrap_angle(np.nan_to_num(course) - xs[:, 0]), np.nan)
     var_f = pd[:, 0] + np.nan_to_num(cm.sigma) ** 2
-    if st.gyro_scale_rel_sigma > 0:
-        # heading turned since the last course update on a straight (where psi was measured)
-        turned = np.concatenate(([0.0], np.cumsum(np.nan_to_num(wz[:-1]) * np.diff(t))))
-        upd = np.where(np.isfinite(innov), turned, np.nan)
-        at_update, _ = hold(upd, t, fill=0.0)
-        var_f = var_f + (st.gyro_scale_rel_sigma * (turned - at_update)) ** 2
+    # heading turned since the last course update on a straight (where psi was measured)
+    upd = np.isfinite(innov)
+    turned = np.concatenate(([0.0], np.cumsum(np.nan_to_num(wz[:-1]) * np.diff(t))))
+    since = turned - hold(np.where(upd, turned, np.nan), t, fill=0.0)[0]
+    var_f = var_f + (st.gyro_scale_rel_sigma * since) ** 2
+    # road bank: the car crabs by ~ k_slip g sin(bank) on a banked straight (assumed beta = 0
+    # there, so psi takes it), and its body-z gyro under-reads the heading rate by
+    # 1/cos(bank) - 1 in turns on the bank; the bank from the accelerometer when present
+    cue = gravity_lateral_sin(drive, speed, wz - xs[:, 1])
+    sin_bank = np.full(t.size, st.road_bank_sigma) if cue is None else cue
+    k_slip, _ = typical.slip_gain_k(vehicle)
+    bank_at_update = hold(np.where(upd, sin_bank, np.nan), t, fill=st.road_bank_sigma)[0]
+    tilt = 1.0 / np.sqrt(1.0 - np.minimum(sin_bank, 0.9) ** 2) - 1.0
+    tilt_turn = np.concatenate(([0.0], np.cumsum(np.abs(np.nan_to_num(wz[:-1])) * tilt[:-1]
+                                                 * np.diff(t))))  # fmt: skip
+    tilt_since = tilt_turn - hold(np.where(upd, tilt_turn, np.nan), t, fill=0.0)[0]
+    var_f = var_f + (k_slip * GRAVITY_M_S2 * bank_at_update) ** 2 + tilt_since**2
     std_f = np.where(fresh, np.sqrt(var_f), np.nan)
+    own_f = np.where(fresh, np.sqrt(pd[:, 0] + np.nan_to_num(cm.sigma) ** 2), np.nan)
     beta_h, age = hold(beta_f, t, fill=0.0)
     std_h, _ = hold(std_f, t, fill=KKF_BETA_PRIOR)
+    own_h, _ = hold(own_f, t, fill=KKF_BETA_PRIOR)
     ok = (age <= max(KKF_MAX_COURSE_AGE_S, 1.5 * gnss_dt)) & (np.abs(speed) > st.v_gate_m_s)
     beta = np.where(ok, beta_h, 0.0)
     beta_std = np.where(ok, std_h, KKF_BETA_PRIOR)
-    return KkfResult(beta, beta_std, xs, pd, straight, fresh, innov, S)
+    beta_std_filter = np.where(ok, own_h, KKF_BETA_PRIOR)
+    return KkfResult(beta, beta_std, xs, pd, straight, fresh, innov, S, beta_std_filter)
 
 
 @register(

@@ -18,11 +18,12 @@ Honest uncertainty (issue 14): the filter's own P describes the error only while
 single-track model holds.  Where it stops fitting (tyres past their linear range, a wrong
 vehicle file, a banked road) the gyro innovations grow; their windowed NIS
 (:func:`sideslip.filters.consistency.nis_consistency`) inflates the reported 1-sigma by
-sqrt(inflation) and sets ``health``.  On top, the sideslip the model adds to the kinematic one
-(beta - lr/L delta, the part that scales with 1/cornering stiffness) carries a relative
-uncertainty ``stiffness_rel_sigma`` (vehicle files are 20-35 % off, DESIGN brief); it is
-added in quadrature to ``beta_std`` and dropped where the GNSS course has measured beta
-directly (it is then in P).
+sqrt(inflation) and sets ``health``.  Two model errors that NIS cannot see are added in
+quadrature: (i) the sideslip the model adds to the kinematic one (beta - lr/L delta, the part
+that scales with 1/cornering stiffness; at least its RMS over the last 2 s) carries a relative
+uncertainty ``stiffness_rel_sigma`` (vehicle files are 20-35 % off); (ii) the road bank the
+flat-road model ignores, through the model's steady-state bank gain, from the accelerometer's
+gravity cue when the drive has ``ay`` (:func:`bank_sigma`).
 
 Low speed, standstill, reversing, outages (never NaN): below ``v_gate_m_s`` or reversing the
 low-speed model of :mod:`sideslip.models.mkf_model`; the course above the gate only (reversing:
@@ -57,9 +58,12 @@ from sideslip.filters.kalman import (
 from sideslip.frames import wrap_angle
 from sideslip.methods.registry import SPEED, register
 from sideslip.models.mkf_model import H_GYRO, V_GATE, MkfNoise, model_table
+from sideslip.models.single_track import continuous_arrays
 from sideslip.settings import settings_dict
 from sideslip.signals import (
     STANDSTILL_SPEED,
+    causal_mean,
+    gravity_lateral_sin,
     hold,
     sample_variance,
     vehicle_speed,
@@ -83,6 +87,7 @@ WHITENESS_LAGS = 20
 # unmodelled bank or tyres beyond the linear range (benchmarks/results/kalman_gps_accuracy.md).
 RESIDUAL_COLOUR_MAX = 0.5
 GNSS_COLUMNS = ("gnss_ve", "gnss_e")  # Doppler velocity, else differenced positions
+STIFFNESS_WINDOW_S = 2.0  # s: window of the stiffness term of beta_std (a slalom half-period)
 
 
 @dataclass(frozen=True)
@@ -98,6 +103,10 @@ class MkfSettings:
     v_gate_m_s : m/s, single-track model and GNSS course above this speed only.
     stiffness_rel_sigma : relative 1-sigma of the cornering stiffness of the vehicle file
         (module docstring); 0 turns the term off.
+    road_bank_sigma : sin of the unmodelled road bank, 1-sigma, for drives without ``ay``
+        (public roads: crown 2-2.5 %, curves banked up to ~6 %).
+    bank_floor_sigma : floor of the bank 1-sigma with an accelerometer cue (accelerometer
+        bias ~0.1 m/s^2 and the cue's lag).
     consistency_window_s : s, window of the NIS test (0 turns the inflation off).
     """
 
@@ -109,6 +118,8 @@ class MkfSettings:
     gyro_bias_psd_rad2_s3: float = MkfNoise.gyro_bias_psd
     v_gate_m_s: float = V_GATE
     stiffness_rel_sigma: float = 0.3
+    road_bank_sigma: float = 0.03
+    bank_floor_sigma: float = 0.01
     consistency_window_s: float = 2.0
 
     def __post_init__(self) -> None:
@@ -118,7 +129,8 @@ class MkfSettings:
         if g is not None and not (math.isfinite(g) and g > 0):
             raise ValueError(f"MkfSettings.gyro_sigma_100hz_rad_s = {g}: expected a number > 0")
         for name in ("steer_psd_rad2_s", "beta_psd_rad2_per_s", "yaw_accel_psd_rad2_s3",
-                     "gyro_bias_psd_rad2_s3", "stiffness_rel_sigma", "consistency_window_s"):  # fmt: skip
+                     "gyro_bias_psd_rad2_s3", "stiffness_rel_sigma", "road_bank_sigma",
+                     "bank_floor_sigma", "consistency_window_s"):  # fmt: skip
             v = getattr(self, name)
             if not (math.isfinite(v) and v >= 0):
                 raise ValueError(f"MkfSettings.{name} = {v}: expected a number >= 0")
@@ -309,6 +321,32 @@ def _nis(innov: FloatArray, s: FloatArray) -> FloatArray:
         return np.where(np.isfinite(innov) & (s > 0), innov * innov / np.where(s > 0, s, 1.0), np.nan)
 
 
+def bank_beta_gain(vehicle: Vehicle, speed: FloatArray) -> FloatArray:
+    """Steady-state sideslip per unit road bank of the single-track model (rad/rad) at each
+    row's speed: the bank column of -A^-1 B (seed 001 eq 1); 0 below the model's gate."""
+    v = np.clip(np.abs(speed), V_GATE, None)
+    grid = np.unique(np.round(v, 1))
+    a2, b2, _, _ = continuous_arrays(vehicle, grid)
+    gain = -np.linalg.solve(a2, b2)[:, 0, 1]
+    return np.asarray(np.interp(v, grid, gain), dtype=float)
+
+
+def bank_sigma(
+    drive: Drive, speed: FloatArray, yaw_rate: FloatArray, settings: MkfSettings
+) -> tuple[FloatArray, str]:
+    """1-sigma (as sin) of the road bank the flat-road model ignores, per row, and its source.
+
+    With an accelerometer: hypot(``bank_floor_sigma``, |g sin(roll + bank)| cue) from
+    :func:`sideslip.signals.gravity_lateral_sin` (conservative in turns, where it also holds
+    the suspension roll).  Without: ``road_bank_sigma`` (typical crown and bank of public
+    roads) on every row.
+    """
+    cue = gravity_lateral_sin(drive, speed, yaw_rate)
+    if cue is None:
+        return np.full(drive.t.size, settings.road_bank_sigma), "typical road bank (no ay)"
+    return np.hypot(settings.bank_floor_sigma, cue), "accelerometer cue (ay - V r) / g"
+
+
 def mkf_estimate(
     name: str,
     drive: Drive,
@@ -334,12 +372,21 @@ def mkf_estimate(
         cons = nis_consistency(t, both, dof, window_s=settings.consistency_window_s)
         inflation, health = cons.inflation, cons.health
         health_params = cons.summary(t)
+    speed = vehicle_speed(drive)
     model_sigma = np.zeros(t.size)
     if settings.stiffness_rel_sigma > 0:
         steer = prob.u[:, 0]
         kin = vehicle.lr / vehicle.wheelbase * steer
-        model_sigma = settings.stiffness_rel_sigma * np.abs(res.x[:, 0] - kin)
-    beta_std = np.sqrt(beta_std**2 * inflation + model_sigma**2)
+        # RMS over the last STIFFNESS_WINDOW_S: a wrong stiffness also shifts the phase of
+        # beta in transients, so its error does not vanish where beta crosses lr/L delta
+        slip = res.x[:, 0] - kin
+        slip_rms = np.sqrt(np.maximum(causal_mean(t, slip**2, STIFFNESS_WINDOW_S), 0.0))
+        model_sigma = settings.stiffness_rel_sigma * np.maximum(np.abs(slip), slip_rms)
+    bank_sd, bank_source = bank_sigma(drive, speed, res.x[:, 1], settings)
+    bank_beta_sd = np.abs(bank_beta_gain(vehicle, speed)) * bank_sd
+    if bank is not None:
+        bank_beta_sd = np.zeros(t.size)  # the bank is a known input
+    beta_std = np.sqrt(beta_std**2 * inflation + model_sigma**2 + bank_beta_sd**2)
     g_sigma, g_source = gyro_sigma(drive, settings)
     series = {
         "beta": res.x[:, 0],
@@ -375,6 +422,12 @@ def mkf_estimate(
             },
             "residuals": residual_diagnostics(res),
             "health": health_params,
+            "beta_std_terms": {
+                "filter": "P_beta x windowed-NIS inflation",
+                "stiffness": f"{settings.stiffness_rel_sigma:g} x max(|beta - lr/L delta|, its RMS "
+                f"over {STIFFNESS_WINDOW_S:g} s)",
+                "road_bank": bank_source,
+            },
             "settings": settings_dict(settings),
         }
     )

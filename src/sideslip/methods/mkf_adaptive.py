@@ -121,7 +121,7 @@ def identify_from_kkf(
     steer, _ = hold(drive["steer"], t)
     speed = vehicle_speed(drive)
     # only fresh KKF sideslip whose heading is known well (after a straight, not too long ago)
-    use = res.beta_fresh & (res.beta_std < ID_BETA_STD_MAX)
+    use = res.beta_fresh & (res.beta_std_filter < ID_BETA_STD_MAX)
     beta = np.where(use, res.beta, np.nan)
     ident = identify_cornering_stiffness(t, beta, r, steer, speed, vehicle, use)
     ident["gyro_scale"] = 1.0 + scale  # measured / true
@@ -150,7 +150,4 @@ def mkf_adaptive(drive: Drive, vehicle: Vehicle, settings: MkfSettings | None = 
     ident = identify_from_kkf(drive, vehicle, kst)
     tuned = vehicle.with_changes(cf=ident["cf"], cr=ident["cr"])
     params = {"identification": ident, "cf_file": vehicle.cf, "cr_file": vehicle.cr}
-    if ident["identified"]:
-        # the stiffness now comes from the drive: the file's uncertainty no longer applies
-        st = MkfSettings(**{**st.__dict__, "stiffness_rel_sigma": 0.5 * st.stiffness_rel_sigma})
     return mkf_estimate("mkf_adaptive", drive, tuned, params, None, st)
