@@ -65,9 +65,14 @@ Why the additions (each found necessary on simulated drives, and each present on
 
 Sideslip output: eq 2.3, beta = atan(lr tan(delta_c) / L) with the corrected steering angle
 (atan, not atan2, so reversing keeps the same value: v_y / v_x = lr tan(delta)/L for both
-signs of v).  ``beta_std`` combines the steering-calibration covariance with the kinematic
-model's own error, the rear-axle slip angle ~ k_slip |a_y| (k_slip = m lf / (L cr), the
-vehicle's slip gain when the file gives it, else 0.005 s^2/m; a_y ~ v r).
+signs of v).  ``beta_std`` combines the steering-calibration covariance (times the windowed-NIS
+inflation) with the kinematic model's own error, the rear-axle slip angle ~ k_slip |a_y|
+(k_slip = m lf / (L cr), the vehicle's slip gain when the file gives it, else 0.005 s^2/m;
+a_y ~ v r; at least its RMS over the last 2 s, as transients shift its phase), and the road
+bank's share, (k_slip + lr/L K_us) g sin(bank) (the car crabs on a bank while the driver holds
+the steering that eq 2.3 reads as sideslip), the bank from the accelerometer's gravity cue
+(:func:`sideslip.signals.gravity_lateral_sin`) when the drive has ``ay``, else
+``EkfTuning.road_bank_sigma``.
 
 Model error stated as noise (sensor-grade numbers, not fitted to any drive): eq 2.2 keeps a
 floor of 0.02 rad/s plus 5 % of its value (yaw lag behind the steering, nonlinear tyres);
@@ -120,7 +125,7 @@ from numpy.typing import NDArray
 from sideslip import gnss, typical
 from sideslip.drive import Drive
 from sideslip.estimate import Estimate
-from sideslip.filters.consistency import nis_consistency
+from sideslip.filters.nis_windows import binned_nis_consistency
 from sideslip.methods.ekf_alignment import initial_alignment
 from sideslip.methods.ekf_filter import (
     GNSS_FORCED,
@@ -374,7 +379,7 @@ def _estimate(
     dof = (np.isfinite(res.nis_steer).astype(float) + np.isfinite(res.nis_gyro)
            + 2.0 * np.isfinite(res.nis_gnss))  # fmt: skip
     if tu.consistency_window_s > 0:
-        cons = nis_consistency(t, nis_sum, dof, window_s=tu.consistency_window_s)
+        cons = binned_nis_consistency(t, nis_sum, dof, tu.consistency_window_s)
         inflation, health, health_params = cons.inflation, cons.health, cons.summary(t)
     k = np.sqrt(inflation)
     # road bank: the car crabs by k_slip g sin(bank) on a bank while the driver holds

@@ -51,8 +51,8 @@ from numpy.typing import NDArray
 from sideslip import gnss, typical
 from sideslip.drive import Drive
 from sideslip.estimate import Estimate
-from sideslip.filters.consistency import nis_consistency
 from sideslip.filters.kalman import predict_nb, update_scalar_nb
+from sideslip.filters.nis_windows import binned_nis_consistency
 from sideslip.frames import wrap_angle
 from sideslip.methods.mkf import (
     GNSS_COLUMNS,
@@ -349,6 +349,8 @@ class KkfResult:
     innov: FloatArray
     S: FloatArray
     beta_std_filter: FloatArray  # eq 6 from the filter's own P (no model-error terms)
+    gyro_sigma_100hz: float  # rad/s, the gyro noise the filter ran with, and its source
+    gyro_sigma_source: str
 
 
 def run_kkf(
@@ -375,7 +377,7 @@ def run_kkf(
     P0 = np.diag([SIGMA_PSI0**2, SIGMA_BIAS0**2, SIGMA_SCALE0**2 if estimate_scale else 0.0])
     # the yaw-rate lever-arm term of the course (rx r / V) is removed with the raw gyro
     course = np.where(np.isfinite(cm.course), cm.course - cm.hr * np.nan_to_num(wz), np.nan)
-    g_sigma, _ = kkf_gyro_sigma(drive, st)
+    g_sigma, g_source = kkf_gyro_sigma(drive, st)
     xs, pd, straight, innov, S = _kkf_loop(
         t, wz, wz_mean, wz_fast, sample_variance(t, g_sigma), course, cm.sigma**2, crate, speed,
         zero_rate, x0, P0, st.gyro_bias_psd_rad2_s3, st.straight_on_rad_s, st.straight_off_rad_s,
@@ -386,21 +388,22 @@ def run_kkf(
     var_f = pd[:, 0] + np.nan_to_num(cm.sigma) ** 2
     # heading turned since the last course update on a straight (where psi was measured)
     upd = np.isfinite(innov)
-    turned = np.concatenate(([0.0], np.cumsum(np.nan_to_num(wz[:-1]) * np.diff(t))))
-    since = turned - hold(np.where(upd, turned, np.nan), t, fill=0.0)[0]
-    var_f = var_f + (st.gyro_scale_rel_sigma * since) ** 2
+    last = np.where(upd, np.arange(t.size), 0)
+    np.maximum.accumulate(last, out=last)  # row of the last update (0 before the first)
+    dt_rows = np.diff(t)
+    turned = np.concatenate(([0.0], np.cumsum(np.nan_to_num(wz[:-1]) * dt_rows)))
+    var_f = var_f + (st.gyro_scale_rel_sigma * (turned - turned[last])) ** 2
     # road bank: the car crabs by ~ k_slip g sin(bank) on a banked straight (assumed beta = 0
     # there, so psi takes it), and its body-z gyro under-reads the heading rate by
     # 1/cos(bank) - 1 in turns on the bank; the bank from the accelerometer when present
     cue = gravity_lateral_sin(drive, speed, wz - xs[:, 1])
     sin_bank = np.full(t.size, st.road_bank_sigma) if cue is None else cue
     k_slip, _ = typical.slip_gain_k(vehicle)
-    bank_at_update = hold(np.where(upd, sin_bank, np.nan), t, fill=st.road_bank_sigma)[0]
+    bank_at_update = np.where(upd.any(), sin_bank[last], st.road_bank_sigma)
     tilt = 1.0 / np.sqrt(1.0 - np.minimum(sin_bank, 0.9) ** 2) - 1.0
     tilt_turn = np.concatenate(([0.0], np.cumsum(np.abs(np.nan_to_num(wz[:-1])) * tilt[:-1]
-                                                 * np.diff(t))))  # fmt: skip
-    tilt_since = tilt_turn - hold(np.where(upd, tilt_turn, np.nan), t, fill=0.0)[0]
-    var_f = var_f + (k_slip * GRAVITY_M_S2 * bank_at_update) ** 2 + tilt_since**2
+                                                 * dt_rows)))  # fmt: skip
+    var_f = var_f + (k_slip * GRAVITY_M_S2 * bank_at_update) ** 2 + (tilt_turn - tilt_turn[last]) ** 2
     std_f = np.where(fresh, np.sqrt(var_f), np.nan)
     own_f = np.where(fresh, np.sqrt(pd[:, 0] + np.nan_to_num(cm.sigma) ** 2), np.nan)
     beta_h, age = hold(beta_f, t, fill=0.0)
@@ -410,7 +413,8 @@ def run_kkf(
     beta = np.where(ok, beta_h, 0.0)
     beta_std = np.where(ok, std_h, KKF_BETA_PRIOR)
     beta_std_filter = np.where(ok, own_h, KKF_BETA_PRIOR)
-    return KkfResult(beta, beta_std, xs, pd, straight, fresh, innov, S, beta_std_filter)
+    return KkfResult(beta, beta_std, xs, pd, straight, fresh, innov, S, beta_std_filter,
+                     g_sigma, g_source)  # fmt: skip
 
 
 @register(
@@ -432,9 +436,9 @@ def kkf(drive: Drive, vehicle: Vehicle, settings: KkfSettings | None = None) -> 
     health = np.zeros(t.size)
     health_params: dict[str, object] = {"criterion": "off"}
     if st.consistency_window_s > 0:
-        cons = nis_consistency(t, nis, 1, window_s=st.consistency_window_s)
+        cons = binned_nis_consistency(t, nis, 1, st.consistency_window_s)
         inflation, health, health_params = cons.inflation, cons.health, cons.summary(t)
-    g_sigma, g_source = kkf_gyro_sigma(drive, st)
+    g_sigma, g_source = res.gyro_sigma_100hz, res.gyro_sigma_source
     series = {
         "beta": res.beta,
         "beta_std": res.beta_std * np.sqrt(inflation),

@@ -48,13 +48,13 @@ from numpy.typing import NDArray
 from sideslip import gnss
 from sideslip.drive import Drive
 from sideslip.estimate import Estimate
-from sideslip.filters.consistency import nis_consistency
 from sideslip.filters.kalman import (
     normalised_innovations,
     predict_nb,
     update_scalar_nb,
     whiteness,
 )
+from sideslip.filters.nis_windows import binned_nis_consistency
 from sideslip.frames import wrap_angle
 from sideslip.methods.registry import SPEED, register
 from sideslip.models.mkf_model import H_GYRO, V_GATE, MkfNoise, model_table
@@ -369,7 +369,7 @@ def mkf_estimate(
     if settings.consistency_window_s > 0:
         both = np.nan_to_num(nis_g) + np.nan_to_num(nis_c)
         dof = np.isfinite(nis_g).astype(float) + np.isfinite(nis_c).astype(float)
-        cons = nis_consistency(t, both, dof, window_s=settings.consistency_window_s)
+        cons = binned_nis_consistency(t, both, dof, settings.consistency_window_s)
         inflation, health = cons.inflation, cons.health
         health_params = cons.summary(t)
     speed = vehicle_speed(drive)
