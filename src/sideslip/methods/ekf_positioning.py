@@ -174,8 +174,9 @@ class EkfTuning:
     prior wide enough for an uncalibrated phone), single-frequency standalone GNSS (about 1 m
     error drifting over a minute).  Seed 004 publishes no noise values, so there is no "paper"
     preset.  ``preset="auto"`` (default) takes the GNSS position sigma from the drive's
-    ``gnss_pos_std`` (median) and, for the gyro variant, the gyro white noise from the drive
-    (:func:`sideslip.signals.white_noise_sigma_100hz`); ``"typical"`` uses the fixed values.
+    ``gnss_pos_std`` (median) and, for the gyro variant, raises the gyro sigma to the drive's
+    white noise when that is larger (:func:`sideslip.signals.white_noise_sigma_100hz`; a noisy
+    phone gyro); ``"typical"`` uses the fixed values.
     """
 
     preset: Literal["auto", "typical"] = "auto"
@@ -286,8 +287,11 @@ def _gyro_sigma(drive: Drive, tu: EkfTuning) -> tuple[float, str]:
     if tu.preset == "auto" and "wz" in drive:
         ident = white_noise_sigma_100hz(drive.t, drive["wz"])
         if ident is not None:
+            # the gyro's measurement noise here also stands for its bias instability between
+            # GNSS fixes: the identified white noise raises the typical value, never lowers it
             rate_factor = math.sqrt(0.01 / max(drive.dt_median, 1e-4))
-            return max(ident * rate_factor, 0.1 * tu.gyro_sigma_rad_s), "drive (second differences)"
+            sigma = max(ident * rate_factor, tu.gyro_sigma_rad_s)
+            return sigma, "drive (second differences), >= typical"
     return tu.gyro_sigma_rad_s, "typical"
 
 
