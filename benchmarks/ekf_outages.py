@@ -22,19 +22,8 @@ import numpy as np
 
 from sideslip.drive import Drive
 from sideslip.evaluate import Window, metrics, window_errors
-from sideslip.methods.ekf_positioning import (
-    BD,
-    BG,
-    DW,
-    KD,
-    KU,
-    SW,
-    E,
-    EkfResult,
-    EkfTuning,
-    N,
-    run_ekf,
-)
+from sideslip.methods.ekf_positioning import EkfResult, EkfTuning, run_ekf
+from sideslip.models.kinematic_ekf import BD, BG, DW, KD, KU, SW, E, N
 from sideslip.simulate import simulate
 from sideslip.vehicle import Vehicle, load_vehicle
 
@@ -49,8 +38,9 @@ def paper_model(vehicle: Vehicle) -> tuple[Vehicle, EkfTuning]:
     """The paper's plain kinematic EKF: d_w, K_us and b_r frozen at 0."""
     return (
         vehicle.with_changes(understeer_gradient_given=0.0),
-        EkfTuning(init_wheel_sf_diff=0.0, init_understeer_rel=0.0, init_understeer_min=0.0,
-                  understeer_walk=0.0, road_bank=0.0),
+        EkfTuning(init_wheel_scale_diff_sigma=0.0, understeer_prior_sigma_rel=0.0,
+                  understeer_prior_sigma_min=0.0, understeer_walk_per_sqrt_s=0.0,
+                  road_bank_sigma=0.0),
     )  # fmt: skip
 
 

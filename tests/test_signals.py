@@ -63,3 +63,45 @@ def test_angles_and_geodetic_roundtrip():
     assert lat[0] == pytest.approx(37.722, abs=1e-9)
     assert lon[0] == pytest.approx(-122.471, abs=1e-9)
     assert h[0] == pytest.approx(25.0, abs=1e-4)
+
+
+def test_white_noise_sigma_is_identified_under_a_manoeuvre():
+    from sideslip.signals import white_noise_sigma_100hz
+
+    rng = np.random.default_rng(4)
+    t = np.arange(0.0, 120.0, 0.02)  # 50 Hz
+    smooth = 0.3 * np.sin(2 * np.pi * 0.5 * t)  # a slalom's yaw rate, rad/s
+    x = smooth + rng.normal(0.0, 0.002, t.size)
+    got = white_noise_sigma_100hz(t, x)
+    # fixed density: 0.002 per sample at 50 Hz is 0.002 * sqrt(2) per sample at 100 Hz;
+    # 6000 samples with a robust (MAD) scale: ~2 % 1-sigma, 8 % is 4 sigma
+    assert got == pytest.approx(0.002 * math.sqrt(2.0), rel=0.08)
+    assert white_noise_sigma_100hz(t[:100], x[:100]) is None  # too few samples
+
+
+def test_sample_variance_scales_with_rate():
+    from sideslip.signals import sample_variance
+
+    t = np.r_[np.arange(0.0, 1.0, 0.01), 1.0 + np.arange(1, 11) * 0.05]
+    var = sample_variance(t, 0.1)
+    assert var[50] == pytest.approx(0.01)
+    assert var[-1] == pytest.approx(0.01 * 0.01 / 0.05)
+
+
+def test_gravity_cue_reads_the_bank_of_a_straight_banked_road():
+    from sideslip.signals import GRAVITY_M_S2, gravity_lateral_sin
+
+    n = 1000
+    t = np.arange(n) * 0.01
+    bank = 0.05  # sin of the bank
+    cols = {"t": t, "ay": np.full(n, GRAVITY_M_S2 * bank), "wz": np.zeros(n),
+            "v_rl": np.full(n, 20.0), "v_rr": np.full(n, 20.0)}
+    drive = drive_from_columns(cols, {})
+    cue = gravity_lateral_sin(drive, vehicle_speed(drive), np.zeros(n))
+    np.testing.assert_allclose(cue, bank, atol=1e-12)
+    # a level turn: the lateral force is all kinematic (V r), no gravity component
+    turn = drive_from_columns({**cols, "ay": np.full(n, 20.0 * 0.1)}, {})
+    np.testing.assert_allclose(gravity_lateral_sin(turn, vehicle_speed(turn), np.full(n, 0.1)),
+                               0.0, atol=1e-12)
+    no_acc = drive_from_columns({k: v for k, v in cols.items() if k != "ay"}, {})
+    assert gravity_lateral_sin(no_acc, vehicle_speed(no_acc), np.zeros(n)) is None

@@ -118,30 +118,16 @@ def speed_raw(drive: Drive) -> FloatArray | None:
 def gnss_course(
     drive: Drive, min_speed: float = GNSS_COURSE_MIN_SPEED
 ) -> tuple[NDArray[np.intp], FloatArray, FloatArray]:
-    """GNSS Doppler course over ground at GNSS rows above a speed gate.
+    """GNSS course over ground at GNSS rows above a speed gate (no other gate).
 
     Returns ``(rows, course_rad, speed_mps)``: course = atan2(v_n, v_e) (ENU, from East,
-    counter-clockwise), only where the horizontal Doppler speed exceeds ``min_speed``.
-    Falls back to differencing GNSS positions when the drive has no Doppler velocity.
+    counter-clockwise), only where the horizontal GNSS speed exceeds ``min_speed``; from the
+    GNSS layer (:func:`sideslip.gnss.course_samples`: Doppler, else differenced positions).
     """
-    if "gnss_ve" in drive and "gnss_vn" in drive:
-        ve, vn = drive["gnss_ve"], drive["gnss_vn"]
-    elif "gnss_e" in drive and "gnss_n" in drive:
-        rows = sample_rows(drive["gnss_e"])
-        ve = np.full_like(drive.t, np.nan)
-        vn = np.full_like(drive.t, np.nan)
-        if rows.size >= 2:
-            dt = np.diff(drive.t[rows])
-            mid_e = np.diff(drive["gnss_e"][rows]) / dt
-            mid_n = np.diff(drive["gnss_n"][rows]) / dt
-            ve[rows[1:]] = mid_e
-            vn[rows[1:]] = mid_n
-    else:
-        empty = np.zeros(0, dtype=np.intp)
-        return empty, np.zeros(0), np.zeros(0)
-    speed = np.hypot(ve, vn)
-    rows = np.flatnonzero(np.isfinite(speed) & (speed > min_speed))
-    return rows, np.arctan2(vn[rows], ve[rows]), speed[rows]
+    from sideslip import gnss  # the GNSS layer reads signals.hold: imported here, not above
+
+    cs = gnss.course_samples(drive, None, min_speed, use_positions=True, max_sigma=np.inf)
+    return cs.rows, cs.course, cs.speed
 
 
 def standstill(drive: Drive, speed_threshold: float = STANDSTILL_SPEED) -> BoolArray:
@@ -162,3 +148,72 @@ def reversing(drive: Drive, speed_threshold: float = STANDSTILL_SPEED) -> BoolAr
 def course_from_velocity(ve: FloatArray, vn: FloatArray) -> FloatArray:
     """Course over ground atan2(v_n, v_e), rad, wrapped to [-pi, pi)."""
     return wrap_angle(np.arctan2(vn, ve))
+
+
+def sample_variance(t: FloatArray, sigma_100hz: float) -> FloatArray:
+    """Per-sample variance of a white-noise sensor of fixed density whose 1-sigma is
+    ``sigma_100hz`` at 100 Hz: sigma_100Hz^2 * (rate / 100 Hz), the rate from each row's step."""
+    dt = np.diff(t, prepend=t[0] - (t[1] - t[0] if t.size > 1 else 0.01))
+    dt = np.clip(dt, 1e-4, 1.0)
+    return np.asarray(sigma_100hz**2 * (0.01 / dt), dtype=float)
+
+
+def white_noise_sigma_100hz(t: FloatArray, x: FloatArray, max_dt: float = 0.05) -> float | None:
+    """1-sigma at 100 Hz of a sensor's white noise, identified from the drive itself.
+
+    The second difference of consecutive samples, x_k+1 - 2 x_k + x_k-1, has variance
+    6 sigma^2 for white noise, while a vehicle signal sampled at 20 Hz or faster contributes
+    little (its second difference is ~ x'' dt^2).  A robust scale (1.4826 x median absolute
+    deviation) ignores manoeuvres and glitches.  The per-sample sigma is referred to 100 Hz by
+    sqrt(100 Hz / rate).  None with fewer than 200 usable triples or slower sampling than
+    ``max_dt``.
+    """
+    rows = np.flatnonzero(np.isfinite(x))
+    if rows.size < 203:
+        return None
+    ts, xs = t[rows], x[rows]
+    dt = np.diff(ts)
+    ok = (dt[1:] <= max_dt) & (dt[:-1] <= max_dt) & (np.abs(dt[1:] - dt[:-1]) < 0.1 * dt[1:])
+    if ok.sum() < 200:
+        return None
+    d2 = (xs[2:] - 2.0 * xs[1:-1] + xs[:-2])[ok]
+    step = float(np.median(dt[1:][ok]))
+    mad = float(np.median(np.abs(d2 - np.median(d2))))
+    sigma = 1.4826 * mad / np.sqrt(6.0)
+    return float(sigma * np.sqrt(step / 0.01))
+
+
+def causal_mean(t: FloatArray, x: FloatArray, window_s: float) -> FloatArray:
+    """Causal moving mean over ``window_s`` of the finite samples (0 where none yet)."""
+    v = np.where(np.isfinite(x), x, 0.0)
+    c = np.isfinite(x).astype(float)
+    cv = np.concatenate(([0.0], np.cumsum(v)))
+    cc = np.concatenate(([0.0], np.cumsum(c)))
+    j = np.searchsorted(t, t - window_s, side="right")
+    i = np.arange(t.size) + 1
+    cnt = cc[i] - cc[j]
+    return np.asarray(np.where(cnt > 0, (cv[i] - cv[j]) / np.maximum(cnt, 1.0), 0.0), dtype=float)
+
+
+GRAVITY_M_S2 = 9.80665
+
+
+def gravity_lateral_sin(
+    drive: Drive, speed: FloatArray, yaw_rate: FloatArray, window_s: float = 2.0
+) -> FloatArray | None:
+    """|sin| of the body's total roll against gravity (road bank + suspension roll), per row,
+    from the accelerometer: the lateral specific force a_y minus the kinematic lateral
+    acceleration V r is g sin(roll + bank) (plus V beta', small over ``window_s``, over which
+    both are averaged causally).  ``yaw_rate``: bias-corrected r (rad/s) per row, e.g. a
+    filter's estimate (a raw gyro's bias times V would swamp the cue).  None when the drive
+    has no ``ay``.
+
+    An independent cue of the gravity component that a flat-road vehicle model ignores; on a
+    flat road it is the suspension roll (~ roll gradient * a_y) only.
+    """
+    if "ay" not in drive:
+        return None
+    t = drive.t
+    ay, _ = hold(drive["ay"], t)
+    diff = causal_mean(t, ay - np.abs(speed) * yaw_rate, window_s)
+    return np.asarray(np.clip(np.abs(diff) / GRAVITY_M_S2, 0.0, 1.0), dtype=float)

@@ -11,7 +11,6 @@ from __future__ import annotations
 import functools
 import itertools
 import math
-from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -21,26 +20,11 @@ from scipy.stats import spearmanr
 from sideslip.drive import Drive, drive_from_columns
 from sideslip.errors import InputError
 from sideslip.evaluate import Window, window_errors
-from sideslip.methods.ekf_positioning import (
-    BD,
-    DW,
-    GNSS_REJECTED,
-    KD,
-    KU,
-    NX,
-    SW,
-    E,
-    EkfResult,
-    N,
-    gnss_model,
-    run_ekf,
-    steer_model,
-    transition,
-    transition_matrix,
-    wheel_model,
-)
+from sideslip.methods.ekf_filter import GNSS_REJECTED
+from sideslip.methods.ekf_positioning import EkfResult, EkfTuning, run_ekf
 from sideslip.methods.registry import all_methods, run_method
 from sideslip.models.kinematic import steer_yaw_rate
+from sideslip.models.kinematic_ekf import BD, DW, KD, KU, SW, E, N
 from sideslip.simulate.sensors import SensorConfig, sensor_columns
 from sideslip.simulate.truth import Truth
 from sideslip.vehicle import Vehicle, load_vehicle
@@ -117,50 +101,6 @@ def _smooth_steps(t: np.ndarray, knots: list[tuple[float, float]], rise: float =
 # ------------------------------------------------------------------------------------------
 # Jacobians against finite differences
 # ------------------------------------------------------------------------------------------
-def _state(rng: np.random.Generator) -> np.ndarray:
-    x = np.zeros(NX)
-    x[:5] = [10.0, -4.0, 0.7, 12.0, 0.15]
-    x[5:] = rng.normal(0.0, 1e-3, NX - 5)
-    x[KU] = 0.0025
-    return x
-
-
-def _num_jac(f: Callable[[np.ndarray], Any], x: np.ndarray, eps: float = 1e-6) -> np.ndarray:
-    cols = []
-    for i in range(x.size):
-        dx = np.zeros_like(x)
-        dx[i] = eps
-        cols.append((np.asarray(f(x + dx)) - np.asarray(f(x - dx))) / (2 * eps))
-    return np.array(cols).T
-
-
-def test_transition_jacobian_matches_finite_differences():
-    x = _state(np.random.default_rng(1))
-    args = (0.02, SEDAN.lr, 0.99, 0.98)
-    num = _num_jac(lambda z: transition(z, *args)[0], x)
-    np.testing.assert_allclose(transition_matrix(x, *args), num, rtol=0, atol=1e-8)
-
-
-@pytest.mark.parametrize("side", [0, 1])
-def test_wheel_measurement_jacobian_matches_finite_differences(side):
-    x = _state(np.random.default_rng(2))
-    num = _num_jac(lambda z: wheel_model(z, side, SEDAN.track_rear)[0], x)
-    np.testing.assert_allclose(wheel_model(x, side, SEDAN.track_rear)[1], num, atol=1e-7)
-
-
-def test_steer_measurement_jacobian_matches_finite_differences():
-    x = _state(np.random.default_rng(3))
-    num = _num_jac(lambda z: steer_model(z, 0.08, SEDAN.wheelbase)[0], x)
-    np.testing.assert_allclose(steer_model(x, 0.08, SEDAN.wheelbase)[1], num, atol=1e-7)
-
-
-def test_gnss_measurement_jacobian_matches_finite_differences():
-    x = _state(np.random.default_rng(4))
-    for k in range(2):
-        num = _num_jac(lambda z, k=k: gnss_model(z, 0.8, -0.3)[k], x)
-        np.testing.assert_allclose(gnss_model(x, 0.8, -0.3)[2 + k], num, atol=1e-8)
-
-
 # ------------------------------------------------------------------------------------------
 # calibration on the seed-004 drive
 # ------------------------------------------------------------------------------------------
@@ -412,7 +352,7 @@ def test_vehicle_file_with_only_geometry_runs_on_typical_defaults():
     bare = Vehicle(name="bare", source="bare.toml", lf=SEDAN.lf, lr=SEDAN.lr,
                    track_rear=SEDAN.track_rear, gnss_xyz=SEDAN.gnss_xyz)  # fmt: skip
     est = run_method(all_methods()["ekf_wss_sas"], drive, bare)
-    assert est.params["understeer_gradient_std"] < 0.0015  # the drive taught it something
+    assert est.params["understeer_gradient_rad_m_s2_sigma"] < 0.0015  # the drive taught it something
     err = np.hypot(est["e"] - drive["ref_e"], est["n"] - drive["ref_n"])
     assert math.sqrt(np.mean(err**2)) < 2.5  # GNSS 1 Hz with a 1 m drifting error
 
@@ -436,3 +376,25 @@ def test_a_vehicle_file_without_track_runs_and_says_what_it_assumed() -> None:
     assert metrics(drive, est.series)["pos_rmse_m"] < 3.0
     front_only = v.with_changes(track_rear=math.nan)
     assert run_method(method, drive, front_only).params["track_rear_m"] == v.track_front
+
+
+def test_ekf_tuning_is_a_validated_frozen_dataclass_reached_by_name() -> None:
+    import dataclasses
+
+    with pytest.raises(ValueError, match=r"EkfTuning.gnss_tau_s = 0.0: expected > 0 s"):
+        EkfTuning(gnss_tau_s=0.0)
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        EkfTuning().wheel_sigma_m_s = 1.0  # type: ignore[misc]
+    drive = sim_drive("suburban_outages", 0)
+    est = run_method(all_methods()["ekf_wss_sas"], drive, SEDAN, {"gnss_tau_s": 30.0})
+    assert est.params["settings"]["gnss_tau_s"] == 30.0
+    # identified parameters: measured / true scales with their 1-sigma, units in the names;
+    # the rear tyres' 0.5 % radius errors within 0.4 % (as the state test above)
+    true = drive.meta["truth_sensor"]["wheel_scale_factor"]  # [FL, FR, RL, RR]
+    assert est.params["wheel_speed_scale"] == pytest.approx(1.0 + 0.5 * (true[2] + true[3]),
+                                                            abs=0.004)  # fmt: skip
+    assert est.params["wheel_speed_scale_sigma"] > 0.0
+    assert {"steer_scale", "steer_offset_rad", "understeer_gradient_rad_m_s2_sigma"} <= set(
+        est.params)
+    assert est.series["health"].shape == drive.t.shape
+    assert np.isfinite(est.innovations["gnss_nis"]).sum() > 100

@@ -39,6 +39,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from sideslip import gnss
 from sideslip.drive import Drive
 from sideslip.errors import InputError
 from sideslip.frames import wrap_angle
@@ -108,19 +109,13 @@ class HeadingFit:
 def course_samples(
     drive: Drive, signed_speed: FloatArray, min_speed: float = HEADING_MIN_SPEED
 ) -> CourseSamples:
-    """Fresh Doppler samples above ``min_speed``; course turned by pi where ``signed_speed`` < 0."""
-    if "gnss_ve" not in drive or "gnss_vn" not in drive:
-        empty = np.zeros(0)
-        return CourseSamples(np.zeros(0, dtype=np.intp), empty, empty, empty)
-    ve, vn = drive["gnss_ve"], drive["gnss_vn"]
-    speed = np.hypot(ve, vn)
-    rows = np.flatnonzero(np.isfinite(speed) & (speed > min_speed))
-    course = np.arctan2(vn[rows], ve[rows])
-    course = np.where(signed_speed[rows] < 0.0, wrap_angle(course + np.pi), course)
-    vstd = drive["gnss_vel_std"][rows] if "gnss_vel_std" in drive else np.full(rows.size, np.nan)
-    vstd = np.where(np.isfinite(vstd) & (vstd > 0), vstd, DEFAULT_VEL_STD)
-    sigma = np.maximum(vstd / speed[rows], np.radians(0.05))
-    return CourseSamples(rows, course, speed[rows], sigma)
+    """Fresh Doppler samples above ``min_speed``; course turned by pi where ``signed_speed`` < 0.
+
+    Taken from the GNSS layer (:func:`sideslip.gnss.course_samples`: Doppler only, the speed
+    confirmed by ``signed_speed``, its course 1-sigma model and receiver-sigma gate).
+    """
+    cs = gnss.course_samples(drive, signed_speed, min_speed, use_positions=False)
+    return CourseSamples(cs.rows, cs.course, cs.speed, cs.sigma)
 
 
 def check_yaw_rate_sign(

@@ -65,9 +65,14 @@ Why the additions (each found necessary on simulated drives, and each present on
 
 Sideslip output: eq 2.3, beta = atan(lr tan(delta_c) / L) with the corrected steering angle
 (atan, not atan2, so reversing keeps the same value: v_y / v_x = lr tan(delta)/L for both
-signs of v).  ``beta_std`` combines the steering-calibration covariance with the kinematic
-model's own error, the rear-axle slip angle ~ k_slip |a_y| (k_slip = m lf / (L cr), the
-vehicle's slip gain when the file gives it, else 0.005 s^2/m; a_y ~ v r).
+signs of v).  ``beta_std`` combines the steering-calibration covariance (times the windowed-NIS
+inflation) with the kinematic model's own error, the rear-axle slip angle ~ k_slip |a_y|
+(k_slip = m lf / (L cr), the vehicle's slip gain when the file gives it, else 0.005 s^2/m;
+a_y ~ v r; at least its RMS over the last 2 s, as transients shift its phase), and the road
+bank's share, (k_slip + lr/L K_us) g sin(bank) (the car crabs on a bank while the driver holds
+the steering that eq 2.3 reads as sideslip), the bank from the accelerometer's gravity cue
+(:func:`sideslip.signals.gravity_lateral_sin`) when the drive has ``ay``, else
+``EkfTuning.road_bank_sigma``.
 
 Model error stated as noise (sensor-grade numbers, not fitted to any drive): eq 2.2 keeps a
 floor of 0.02 rad/s plus 5 % of its value (yaw lag behind the steering, nonlinear tyres);
@@ -76,6 +81,14 @@ process noise on the lateral position with a 2 s correlation time.  The GNSS err
 Gauss-Markov (tau 60 s) and 45 % white of the receiver's ``gnss_pos_std`` (1.5 m when the
 drive has none): standalone code positions drift, and treating them as white would make the
 filter over-confident in its heading.
+
+Models as plain functions with tested Jacobians: :mod:`sideslip.models.kinematic_ekf`; Kalman
+steps: :mod:`sideslip.filters.kalman` (sparse-F predict, Joseph-form scalar updates); GNSS
+samples, sigma defaults and the Gauss-Markov discretisation: :mod:`sideslip.gnss`; initial
+alignment: :mod:`sideslip.methods.ekf_alignment`.  Settings: :class:`EkfTuning`.  Honest
+uncertainty: the windowed NIS of the steering, gyro and GNSS updates
+(:func:`sideslip.filters.consistency.nis_consistency`) inflates the reported 1-sigmas where the
+model stops fitting and gives the ``health`` series.
 
 Paper equations re-derived (see :mod:`sideslip.models.kinematic`): eq 2.6 sign
 (r = (v_RR - v_RL)/T_r, ISO), eq 2.4 sign (v_y = +lr r), eq 2.1 (rotation by psi, not
@@ -101,111 +114,126 @@ gaps in any sensor (no update; the covariance grows).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
-from typing import Any, NamedTuple
+from typing import Any, Literal
 
-import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from sideslip import typical
+from sideslip import gnss, typical
 from sideslip.drive import Drive
 from sideslip.estimate import Estimate
-from sideslip.methods.registry import register
-from sideslip.models.kinematic import (
-    cg_velocity,
-    enu_rate,
-    kinematic_beta,
-    lever_arm_enu,
-    rear_axle_speed,
-    rear_axle_yaw_rate,
-    steer_yaw_rate,
+from sideslip.filters.nis_windows import binned_nis_consistency
+from sideslip.methods.ekf_alignment import initial_alignment
+from sideslip.methods.ekf_filter import (
+    GNSS_FORCED,
+    GNSS_REJECTED,
+    GNSS_USED,
+    LoopConsts,
+    LoopTuning,
+    ekf_loop,
 )
+from sideslip.methods.registry import register
+from sideslip.models.kinematic import rear_axle_speed
+from sideslip.models.kinematic_ekf import (
+    BD,
+    BG,
+    DW,
+    GE,
+    GN,
+    KD,
+    KU,
+    NX,
+    PSI,
+    SW,
+    E,
+    N,
+    R,
+    V,
+)
+from sideslip.settings import settings_dict
+from sideslip.signals import causal_mean, gravity_lateral_sin, white_noise_sigma_100hz
 from sideslip.vehicle import G, Vehicle
 
 FloatArray = NDArray[np.float64]
 
-# state indices
-E, N, PSI, V, R, SW, DW, KD, BD, KU, BR, GE, GN, BG = range(14)
-NX = 14
-STATE_NAMES = ("e", "n", "yaw", "v", "r", "wheel_scale_factor", "wheel_scale_factor_diff",
-               "steer_scale_factor", "steer_offset", "understeer_gradient", "road_steer_offset",
-               "gnss_bias_e", "gnss_bias_n", "gyro_bias")
-
-# GNSS row flags in EkfResult.gnss_flag
-GNSS_NONE, GNSS_USED, GNSS_REJECTED, GNSS_FORCED = 0, 1, 2, 3
-
+SLIP_WINDOW_S = 2.0  # s: RMS window of the slip term of beta_std
 CHI2_2DOF_999 = 13.815510557964274  # 99.9 % quantile of chi-square with 2 degrees of freedom
-ALIGN_DISTANCE_M = 30.0  # travel needed for the initial heading alignment
-ALIGN_WINDOW_S = 60.0  # GNSS fixes used for the alignment: at most this long before it ends
 
 
-class EkfTuning(NamedTuple):
-    """Noise and initial uncertainty of the EKF, all 1-sigma, SI units.
+@dataclass(frozen=True)
+class EkfTuning:
+    """Noise and initial uncertainty of the EKF (settings of ``ekf_wss_sas`` and
+    ``ekf_wss_sas_imu``): 1-sigma per sample (``*_sigma*``), random walks per sqrt(s)
+    (``*_walk_*``), power spectral densities (``*_psd_*``), correlation times (``*_tau_s``).
 
     Sensor grades of a production car and a code-phase GNSS receiver, not fitted to any drive:
     CAN wheel speeds (noise + quantisation + slip), CAN steering angle, a MEMS gyro (its bias
     prior wide enough for an uncalibrated phone), single-frequency standalone GNSS (about 1 m
-    error drifting over a minute).
+    error drifting over a minute).  Seed 004 publishes no noise values, so there is no "paper"
+    preset.  ``preset="auto"`` (default) takes the GNSS position sigma from the drive's
+    ``gnss_pos_std`` (median) and, for the gyro variant, raises the gyro sigma to the drive's
+    white noise when that is larger (:func:`sideslip.signals.white_noise_sigma_100hz`; a noisy
+    phone gyro); ``"typical"`` uses the fixed values.
     """
 
-    wheel_noise: float = 0.03  # per wheel sample, m/s
-    wheel_noise_rel: float = 0.001  # extra per-sample wheel error per m/s of speed (slip), -
-    wheel_zero_band: float = 0.1  # wheel sensors read 0 below about this speed, m/s
-    steer_noise: float = 1.0e-3  # road-wheel angle noise incl. compliance, rad
-    steer_rate_floor: float = 0.02  # eq 2.2 yaw-rate error floor (yaw lag, road crown), rad/s
-    steer_rate_rel: float = 0.05  # eq 2.2 relative yaw-rate error (tyre nonlinearity, lag), -
-    understeer_gradient: float = 0.0025  # prior when the vehicle file cannot give it, rad/(m/s^2)
-    init_understeer_rel: float = 0.3  # prior 1-sigma of the vehicle file's K_us, fraction
-    init_understeer_min: float = 3.0e-4  # floor of that 1-sigma, rad/(m/s^2)
-    init_understeer_default: float = 1.5e-3  # prior 1-sigma when the file cannot give K_us
-    road_bank: float = 0.025  # road crown / bank (sin) behind the road steering offset, -
-    road_tau: float = 30.0  # its correlation time along the drive, s
-    understeer_walk: float = 1.0e-6  # rad/(m/s^2)/sqrt(s)
-    slip_gain: float = 0.005  # rear slip per lateral acceleration when not derivable, s^2/m
-    slip_corr_time: float = 2.0  # correlation time of the kinematic lateral-velocity error, s
-    lateral_floor: float = 0.05  # floor of that lateral-velocity error, m/s
-    gyro_noise: float = 0.005  # per gyro sample, rad/s
-    accel_psd: float = 4.0  # speed random walk (2 m/s^2 of unmodelled acceleration), (m/s^2)^2 s
-    yaw_accel_psd: float = 0.25  # yaw-rate random walk (|r'| < 0.5 rad/s^2), (rad/s^2)^2 s
-    wheel_sf_walk: float = 1.0e-5  # scale-factor random walks, 1/sqrt(s)
-    steer_sf_walk: float = 1.0e-5
-    steer_offset_walk: float = 1.0e-5  # sensor offset drift (0.6 mrad per hour), rad/sqrt(s)
-    gyro_bias_walk: float = 5.0e-5  # rad/s/sqrt(s)
-    gnss_std: float = 1.5  # GNSS horizontal 1-sigma per axis when the drive has no gnss_pos_std, m
+    preset: Literal["auto", "typical"] = "auto"
+    wheel_sigma_m_s: float = 0.03  # per wheel sample
+    wheel_sigma_rel: float = 0.001  # extra per-sample wheel error per m/s of speed (slip), -
+    wheel_zero_band_m_s: float = 0.1  # wheel sensors read 0 below about this speed
+    steer_sigma_rad: float = 1.0e-3  # road-wheel angle noise incl. compliance
+    steer_yaw_rate_sigma_rad_s: float = 0.02  # eq 2.2 yaw-rate error floor (yaw lag, crown)
+    steer_yaw_rate_sigma_rel: float = 0.05  # eq 2.2 relative yaw-rate error (tyres, lag), -
+    understeer_prior_rad_m_s2: float = 0.0025  # prior when the vehicle file cannot give it
+    understeer_prior_sigma_rel: float = 0.3  # prior 1-sigma of the file's K_us, fraction
+    understeer_prior_sigma_min: float = 3.0e-4  # floor of that 1-sigma, rad/(m/s^2)
+    understeer_prior_sigma_default: float = 1.5e-3  # prior 1-sigma without a file K_us
+    road_bank_sigma: float = 0.025  # road crown / bank (sin) behind the road steering offset
+    road_tau_s: float = 30.0  # its correlation time along the drive
+    understeer_walk_per_sqrt_s: float = 1.0e-6  # rad/(m/s^2)/sqrt(s)
+    slip_gain_s2_m: float = 0.005  # rear slip per lateral acceleration when not derivable
+    slip_tau_s: float = 2.0  # correlation time of the kinematic lateral-velocity error
+    lateral_velocity_sigma_m_s: float = 0.05  # floor of that lateral-velocity error
+    gyro_sigma_rad_s: float = 0.005  # per gyro sample (``typical``; ``auto`` identifies it)
+    accel_psd_m2_s3: float = 4.0  # speed random walk (2 m/s^2 of unmodelled acceleration)
+    yaw_accel_psd_rad2_s3: float = 0.25  # yaw-rate random walk (|r'| < 0.5 rad/s^2)
+    wheel_scale_walk_per_sqrt_s: float = 1.0e-5  # scale-factor random walks
+    steer_scale_walk_per_sqrt_s: float = 1.0e-5
+    steer_offset_walk_rad_sqrt_s: float = 1.0e-5  # sensor offset drift (0.6 mrad per hour)
+    gyro_bias_walk_rad_s_sqrt_s: float = 5.0e-5
+    gnss_pos_sigma_m: float = gnss.POS_SIGMA_DEFAULT_M  # per axis, without gnss_pos_std
     gnss_gm_fraction: float = 0.9  # share of that 1-sigma that is slow (Gauss-Markov), -
-    gnss_white_fraction: float = 0.45  # share that is white from fix to fix, -
-    gnss_tau: float = 60.0  # Gauss-Markov time constant of the GNSS error, s
-    gnss_roll_angle: float = 0.05  # roll/pitch that moves a high antenna sideways, rad
-    gate_chi2: float = CHI2_2DOF_999  # innovation gate on GNSS fixes (NIS, 2 dof)
-    max_rejects: float = 5.0  # consecutive rejected fixes after which the next one is forced
-    direction_distance: float = 2.5  # GNSS travel that decides forward/reverse (unsigned), m
-    init_speed: float = 0.5  # initial 1-sigma of v, m/s
-    init_yaw_rate: float = 0.1  # rad/s
-    init_wheel_sf: float = 0.02  # -
-    init_wheel_sf_diff: float = 0.01  # -
-    init_steer_sf: float = 0.1  # -
-    init_steer_offset: float = 0.01  # rad
-    init_gyro_bias: float = 0.05  # rad/s (3 deg/s: uncalibrated consumer MEMS, e.g. a phone)
+    gnss_white_fraction: float = gnss.POS_WHITE_FRACTION  # share white from fix to fix, -
+    gnss_tau_s: float = 60.0  # Gauss-Markov time constant of the GNSS error
+    gnss_roll_sigma_rad: float = 0.05  # roll/pitch that moves a high antenna sideways
+    gnss_gate_nis: float = CHI2_2DOF_999  # innovation gate on GNSS fixes (NIS, 2 dof)
+    gnss_max_rejects: int = 5  # consecutive rejected fixes after which the next is forced
+    direction_distance_m: float = 2.5  # GNSS travel that decides forward/reverse (unsigned)
+    init_speed_sigma_m_s: float = 0.5  # initial 1-sigma of v
+    init_yaw_rate_sigma_rad_s: float = 0.1
+    init_wheel_scale_sigma: float = 0.02
+    init_wheel_scale_diff_sigma: float = 0.01
+    init_steer_scale_sigma: float = 0.1
+    init_steer_offset_sigma_rad: float = 0.01
+    init_gyro_bias_sigma_rad_s: float = 0.05  # 3 deg/s: uncalibrated consumer MEMS (a phone)
+    consistency_window_s: float = 2.0  # windowed-NIS test of the steering/gyro/GNSS updates
+
+    def __post_init__(self) -> None:
+        if self.preset not in ("auto", "typical"):
+            raise ValueError(f"EkfTuning.preset = {self.preset!r}: expected 'auto' or 'typical'")
+        for f in dataclasses.fields(self):
+            v = getattr(self, f.name)
+            if f.name != "preset" and not (math.isfinite(v) and v >= 0):
+                raise ValueError(f"EkfTuning.{f.name} = {v}: expected a number >= 0")
+        for name in ("gnss_tau_s", "road_tau_s", "slip_tau_s"):
+            if getattr(self, name) <= 0:
+                raise ValueError(f"EkfTuning.{name} = {getattr(self, name)}: expected > 0 s")
 
 
-class _Consts(NamedTuple):
-    """Vehicle and tuning numbers passed to the compiled loop."""
-
-    lr: float
-    wheelbase: float
-    track_rear: float
-    ant_x: float
-    ant_y: float
-    ant_z: float
-    slip_gain: float
-    road_std: float
-    wheels_unsigned: bool
-    gnss_white_default: float
-    gnss_gm_std: float
-    use_gyro: bool
-    tuning: EkfTuning
+def _loop_tuning(tu: EkfTuning) -> LoopTuning:
+    return LoopTuning(*(float(getattr(tu, name)) for name in LoopTuning._fields))
 
 
 @dataclass(frozen=True)
@@ -216,7 +244,8 @@ class EkfResult:
     ``STATE_NAMES``), ``var`` (N, 14) their variances, ``cov_en`` (N,) the e-n covariance
     (for the error ellipse), ``beta`` and ``beta_var`` the kinematic sideslip (eq 2.3) and
     its variance, ``gnss_flag`` (N,) int8 GNSS_NONE/USED/REJECTED/FORCED, ``align`` the
-    initial-alignment summary.
+    initial-alignment summary, ``nis_steer``/``nis_gyro``/``nis_gnss`` the NIS of each row's
+    steering (1 dof), gyro (1 dof) and GNSS (2 dof, before gating) updates, NaN where none.
     """
 
     x: FloatArray
@@ -226,461 +255,9 @@ class EkfResult:
     beta_var: FloatArray
     gnss_flag: NDArray[np.int8]
     align: dict[str, Any]
-
-
-# ------------------------------------------------------------------------------------------
-# compiled filter
-# ------------------------------------------------------------------------------------------
-@numba.njit(cache=True)
-def _scalar_update(x: FloatArray, P: FloatArray, h: FloatArray, nu: float, r_var: float) -> None:
-    """x += K nu, P -= K S K' for one scalar measurement with row ``h`` and noise ``r_var``."""
-    nx = x.size
-    ph = P @ h
-    s = h @ ph + r_var
-    if not s > 0.0:
-        return
-    for i in range(nx):
-        x[i] += ph[i] * nu / s
-    for i in range(nx):
-        for j in range(nx):
-            P[i, j] -= ph[i] * ph[j] / s
-    for i in range(nx):  # keep P symmetric with a non-negative diagonal
-        if P[i, i] < 1e-30:
-            P[i, i] = 1e-30
-        for j in range(i):
-            m = 0.5 * (P[i, j] + P[j, i])
-            P[i, j] = m
-            P[j, i] = m
-
-
-@numba.njit(cache=True)
-def transition(
-    x: FloatArray, dt: float, lr: float, a_gm: float, a_road: float
-) -> tuple[FloatArray, FloatArray]:
-    """One Euler step of the process model: (x_next, jac) with the nonzero Jacobian entries.
-
-    ``jac`` = [dE/dpsi, dE/dv, dE/dr, dN/dpsi, dN/dv, dN/dr]; further dpsi/dr = dt,
-    d(g_e, g_n) = a_gm and d(b_r) = a_road on the diagonal (see :func:`transition_matrix`).
-    The heading of the step is its mid-point psi + r dt / 2.
-    """
-    psi_m = x[PSI] + 0.5 * dt * x[R]
-    cs = math.cos(psi_m)
-    sn = math.sin(psi_m)
-    v = x[V]
-    r = x[R]
-    vx, vy = cg_velocity(v, r, lr)  # eq 2.4
-    de, dn = enu_rate(vx, vy, psi_m)  # eq 2.1
-    xn = x.copy()
-    xn[E] += dt * de
-    xn[N] += dt * dn
-    xn[PSI] += dt * r
-    xn[GE] *= a_gm
-    xn[GN] *= a_gm
-    xn[BR] *= a_road
-    jac = np.empty(6)
-    jac[0] = dt * (-v * sn - lr * r * cs)
-    jac[1] = dt * cs
-    jac[2] = dt * (-lr * sn - 0.5 * dt * (v * sn + lr * r * cs))
-    jac[3] = dt * (v * cs - lr * r * sn)
-    jac[4] = dt * sn
-    jac[5] = dt * (lr * cs + 0.5 * dt * (v * cs - lr * r * sn))
-    return xn, jac
-
-
-@numba.njit(cache=True)
-def transition_matrix(
-    x: FloatArray, dt: float, lr: float, a_gm: float, a_road: float
-) -> FloatArray:
-    """The dense 14 x 14 Jacobian F of :func:`transition` (for tests and readers)."""
-    _, jac = transition(x, dt, lr, a_gm, a_road)
-    F = np.eye(NX)
-    F[E, PSI], F[E, V], F[E, R] = jac[0], jac[1], jac[2]
-    F[N, PSI], F[N, V], F[N, R] = jac[3], jac[4], jac[5]
-    F[PSI, R] = dt
-    F[GE, GE] = a_gm
-    F[GN, GN] = a_gm
-    F[BR, BR] = a_road
-    return F
-
-
-@numba.njit(cache=True)
-def wheel_model(x: FloatArray, side: int, track_rear: float) -> tuple[float, FloatArray]:
-    """Predicted rear wheel speed (side 0: left, 1: right) and its Jacobian row (eqs 2.5/2.6).
-
-    v_RL = (1 + s_w - d_w)(v - r T_r/2),  v_RR = (1 + s_w + d_w)(v + r T_r/2).
-    """
-    sgn = -1.0 if side == 0 else 1.0
-    g = 1.0 + x[SW] + sgn * x[DW]
-    u = x[V] + sgn * 0.5 * track_rear * x[R]
-    h = np.zeros(NX)
-    h[V] = g
-    h[R] = sgn * 0.5 * track_rear * g
-    h[SW] = u
-    h[DW] = sgn * u
-    return g * u, h
-
-
-@numba.njit(cache=True)
-def steer_corrected(delta_m: float, k: float, b: float) -> float:
-    """Road-wheel angle from the sensor: (delta_meas - b_d) / (1 + k_d), clamped to +-1.2 rad."""
-    d = (delta_m - b) / (1.0 + k)
-    return min(max(d, -1.2), 1.2)
-
-
-@numba.njit(cache=True)
-def steer_denominator(v: float, kus: float, wheelbase: float) -> float:
-    """L + K_us v^2, kept above L/2 (an oversteering K_us < 0 must not make it vanish)."""
-    return max(wheelbase + kus * v * v, 0.5 * wheelbase)
-
-
-@numba.njit(cache=True)
-def steer_model(x: FloatArray, delta_m: float, wheelbase: float) -> tuple[float, FloatArray]:
-    """Residual h = r - v tan(delta_c - b_r) / (L + K_us v^2) (measured as 0), Jacobian row.
-
-    Eq 2.2 (K_us = 0, b_r = 0) extended by the understeer gradient and the road-induced
-    steering offset b_r = K_us g sin(bank) (the steering a driver holds to go straight on a
-    banked or crowned road), so that the steering calibration is not biased by tyre slip.
-    """
-    k1 = 1.0 + x[KD]
-    d_sensor = steer_corrected(delta_m, x[KD], x[BD])
-    dc = d_sensor - x[BR]
-    tn = math.tan(dc)
-    sec2 = 1.0 + tn * tn
-    v = x[V]
-    kv2 = x[KU] * v * v
-    den = steer_denominator(v, x[KU], wheelbase)
-    clamped = wheelbase + kv2 < 0.5 * wheelbase
-    h = np.zeros(NX)
-    h[R] = 1.0
-    if clamped:
-        h[V] = -tn / den
-    else:
-        h[V] = -tn * (wheelbase - kv2) / (den * den)
-        h[KU] = v * tn * v * v / (den * den)
-    h[KD] = v * sec2 * d_sensor / (k1 * den)
-    h[BD] = v * sec2 / (k1 * den)
-    h[BR] = v * sec2 / den
-    return x[R] - v * tn / den, h
-
-
-@numba.njit(cache=True)
-def gnss_model(
-    x: FloatArray, ant_x: float, ant_y: float
-) -> tuple[float, float, FloatArray, FloatArray]:
-    """Predicted antenna (e, n) = CG + GNSS error + R(psi) lever arm, and the Jacobian rows."""
-    de, dn = lever_arm_enu(x[PSI], ant_x, ant_y)
-    he = np.zeros(NX)
-    hn = np.zeros(NX)
-    he[E] = 1.0
-    he[GE] = 1.0
-    he[PSI] = -dn  # d/dpsi (ax cos - ay sin) = -(ax sin + ay cos)
-    hn[N] = 1.0
-    hn[GN] = 1.0
-    hn[PSI] = de
-    return x[E] + x[GE] + de, x[N] + x[GN] + dn, he, hn
-
-
-@numba.njit(cache=True)
-def _predict(
-    x: FloatArray, P: FloatArray, dt: float, c: _Consts, a_gm: float, a_road: float
-) -> None:
-    """Propagate x and P over dt; P = F P F' + Q with F applied by its nonzero entries."""
-    tu = c.tuning
-    xn, jac = transition(x, dt, c.lr, a_gm, a_road)
-    psi_m = x[PSI] + 0.5 * dt * x[R]
-    cs = math.cos(psi_m)
-    sn = math.sin(psi_m)
-    v = x[V]
-    r = x[R]
-    x[:] = xn
-    f_epsi, f_ev, f_er, f_npsi, f_nv, f_nr = jac[0], jac[1], jac[2], jac[3], jac[4], jac[5]
-    nx = x.size
-    A = P.copy()  # A = F P
-    for j in range(nx):
-        A[E, j] = P[E, j] + f_epsi * P[PSI, j] + f_ev * P[V, j] + f_er * P[R, j]
-        A[N, j] = P[N, j] + f_npsi * P[PSI, j] + f_nv * P[V, j] + f_nr * P[R, j]
-        A[PSI, j] = P[PSI, j] + dt * P[R, j]
-        A[GE, j] = a_gm * P[GE, j]
-        A[GN, j] = a_gm * P[GN, j]
-        A[BR, j] = a_road * P[BR, j]
-    for i in range(nx):  # P = A F'
-        P[i, :] = A[i, :]
-        P[i, E] = A[i, E] + f_epsi * A[i, PSI] + f_ev * A[i, V] + f_er * A[i, R]
-        P[i, N] = A[i, N] + f_npsi * A[i, PSI] + f_nv * A[i, V] + f_nr * A[i, R]
-        P[i, PSI] = A[i, PSI] + dt * A[i, R]
-        P[i, GE] = a_gm * A[i, GE]
-        P[i, GN] = a_gm * A[i, GN]
-        P[i, BR] = a_road * A[i, BR]
-    # process noise
-    P[V, V] += tu.accel_psd * dt
-    P[R, R] += tu.yaw_accel_psd * dt
-    P[SW, SW] += tu.wheel_sf_walk**2 * dt
-    P[DW, DW] += tu.wheel_sf_walk**2 * dt
-    P[KD, KD] += tu.steer_sf_walk**2 * dt
-    P[BD, BD] += tu.steer_offset_walk**2 * dt
-    P[KU, KU] += tu.understeer_walk**2 * dt
-    if c.use_gyro:
-        P[BG, BG] += tu.gyro_bias_walk**2 * dt
-    q_gm = c.gnss_gm_std**2 * (1.0 - a_gm * a_gm)
-    P[GE, GE] += q_gm
-    P[GN, GN] += q_gm
-    P[BR, BR] += c.road_std**2 * (1.0 - a_road * a_road)
-    # kinematic lateral-velocity error (rear slip ~ k_slip a_y), lateral direction (-sn, cs)
-    sig_lat = c.slip_gain * abs(v * r) * abs(v)
-    q_lat = 2.0 * tu.slip_corr_time * (sig_lat**2 + tu.lateral_floor**2) * dt
-    q_lon = 2.0 * tu.slip_corr_time * tu.lateral_floor**2 * dt
-    P[E, E] += q_lat * sn * sn + q_lon * cs * cs
-    P[N, N] += q_lat * cs * cs + q_lon * sn * sn
-    P[E, N] += (q_lon - q_lat) * sn * cs
-    P[N, E] = P[E, N]
-
-
-@numba.njit(cache=True)
-def _ekf_loop(
-    t: FloatArray,
-    v_rl: FloatArray,
-    v_rr: FloatArray,
-    steer: FloatArray,
-    wz: FloatArray,
-    gnss_e: FloatArray,
-    gnss_n: FloatArray,
-    gnss_std: FloatArray,
-    x0: FloatArray,
-    P0: FloatArray,
-    c: _Consts,
-) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, NDArray[np.int8]]:
-    tu = c.tuning
-    n_rows = t.size
-    xs = np.empty((n_rows, NX))
-    vs = np.empty((n_rows, NX))
-    cov_en = np.empty(n_rows)
-    beta = np.zeros(n_rows)
-    beta_var = np.zeros(n_rows)
-    flags = np.zeros(n_rows, dtype=np.int8)
-    x = x0.copy()
-    P = P0.copy()
-    L = c.wheelbase
-    tr = c.track_rear
-    lf = L - c.lr
-    rejects = 0
-    delta_m = 0.0  # latest steering sample (held for the beta output)
-    have_steer = False
-    # unsigned wheel speeds: direction of the current moving stretch (+1 forward, -1 reverse)
-    direction = 1.0
-    decided = True
-    stretch_e = 0.0
-    stretch_n = 0.0
-    stretch_psi = 0.0
-    stretch_dist = 0.0  # wheel odometry since the stretch began, m
-    for k in range(n_rows):
-        if k > 0:
-            dt = t[k] - t[k - 1]
-            stretch_dist += abs(x[V]) * dt
-            _predict(x, P, dt, c, math.exp(-dt / tu.gnss_tau), math.exp(-dt / tu.road_tau))
-        # --- direction of travel when the wheel sensors report magnitudes only --------------
-        if c.wheels_unsigned and math.isfinite(v_rl[k]) and math.isfinite(v_rr[k]):
-            if v_rl[k] == 0.0 and v_rr[k] == 0.0:
-                decided = False  # standing: the next stretch may go either way
-                direction = 1.0
-                stretch_e, stretch_n, stretch_psi = x[E], x[N], x[PSI]
-                stretch_dist = 0.0
-        # --- rear wheel speeds (eqs 2.5/2.6 as per-wheel measurements) --------------------
-        for side in range(2):
-            z = v_rl[k] if side == 0 else v_rr[k]
-            if not math.isfinite(z):
-                continue
-            z = direction * z
-            pred, h = wheel_model(x, side, tr)
-            rv = tu.wheel_noise**2 + (tu.wheel_noise_rel * pred) ** 2
-            if z == 0.0:
-                rv += tu.wheel_zero_band**2  # the sensor reads 0 anywhere below a few pulses
-            _scalar_update(x, P, h, z - pred, rv)
-        # --- steering: eq 2.2 as a yaw-rate pseudo-measurement ------------------------------
-        if math.isfinite(steer[k]):
-            delta_m = steer[k]
-            have_steer = True
-            k1 = 1.0 + x[KD]
-            dc = steer_corrected(delta_m, x[KD], x[BD]) - x[BR]
-            v = x[V]
-            den = steer_denominator(v, x[KU], L)
-            pred, h = steer_model(x, delta_m, L)
-            sec2 = 1.0 + math.tan(dc) ** 2
-            r_s = v * math.tan(dc) / den
-            rv = (v * sec2 * tu.steer_noise / (k1 * den)) ** 2 + tu.steer_rate_floor**2
-            rv += (tu.steer_rate_rel * r_s) ** 2  # tyre nonlinearity, yaw transients
-            _scalar_update(x, P, h, 0.0 - pred, rv)
-        # --- gyro ---------------------------------------------------------------------------
-        if c.use_gyro and math.isfinite(wz[k]):
-            h = np.zeros(NX)
-            h[R] = 1.0
-            h[BG] = 1.0
-            _scalar_update(x, P, h, wz[k] - x[R] - x[BG], tu.gyro_noise**2)
-        # --- GNSS position, gated -----------------------------------------------------------
-        if math.isfinite(gnss_e[k]) and math.isfinite(gnss_n[k]):
-            sw = gnss_std[k] * tu.gnss_white_fraction if math.isfinite(gnss_std[k]) else -1.0
-            if not sw > 0.0:
-                sw = c.gnss_white_default
-            rv = sw * sw + (c.ant_z * tu.gnss_roll_angle) ** 2
-            pred_e, pred_n, he, hn = gnss_model(x, c.ant_x, c.ant_y)
-            if c.wheels_unsigned and not decided:
-                # antenna displacement since the stretch began, along the heading of then
-                ae, an = lever_arm_enu(x[PSI], c.ant_x, c.ant_y)
-                de = gnss_e[k] - ae - stretch_e
-                dn = gnss_n[k] - an - stretch_n
-                moved = math.sqrt(de * de + dn * dn)
-                # decide on a fix that agrees with the wheel odometry (not on a multipath jump)
-                agree = abs(moved - stretch_dist) < max(1.5, 0.3 * stretch_dist)
-                if stretch_dist > tu.direction_distance and agree:
-                    decided = True
-                    if de * math.cos(stretch_psi) + dn * math.sin(stretch_psi) < 0.0:
-                        # reversing: mirror what the stretch dead-reckoned so far
-                        direction = -1.0
-                        moved2 = (x[E] - stretch_e) ** 2 + (x[N] - stretch_n) ** 2
-                        turned = x[PSI] - stretch_psi
-                        x[E] = 2.0 * stretch_e - x[E]
-                        x[N] = 2.0 * stretch_n - x[N]
-                        x[PSI] = stretch_psi - turned
-                        x[V] = -x[V]
-                        x[R] = -x[R]
-                        P[E, E] += moved2
-                        P[N, N] += moved2
-                        P[PSI, PSI] += turned * turned
-                    pred_e, pred_n, he, hn = gnss_model(x, c.ant_x, c.ant_y)
-            nu_e = gnss_e[k] - pred_e
-            nu_n = gnss_n[k] - pred_n
-            pe = P @ he
-            pn = P @ hn
-            s_ee = he @ pe + rv
-            s_nn = hn @ pn + rv
-            s_en = he @ pn
-            det = s_ee * s_nn - s_en * s_en
-            nis = (s_nn * nu_e * nu_e - 2.0 * s_en * nu_e * nu_n + s_ee * nu_n * nu_n) / det
-            if nis <= tu.gate_chi2:
-                flags[k] = GNSS_USED
-                rejects = 0
-            elif rejects >= tu.max_rejects:
-                # persistent disagreement: believe GNSS, widen the position covariance
-                flags[k] = GNSS_FORCED
-                rejects = 0
-                P[E, E] += nu_e * nu_e
-                P[N, N] += nu_n * nu_n
-            else:
-                flags[k] = GNSS_REJECTED
-                rejects += 1
-            if flags[k] != GNSS_REJECTED:
-                _scalar_update(x, P, he, nu_e, rv)
-                pred_e, pred_n, he, hn = gnss_model(x, c.ant_x, c.ant_y)
-                _scalar_update(x, P, hn, gnss_n[k] - pred_n, rv)
-        # --- store --------------------------------------------------------------------------
-        xs[k] = x
-        for i in range(NX):
-            vs[k, i] = P[i, i]
-        cov_en[k] = P[E, N]
-        if have_steer:
-            k1 = 1.0 + x[KD]
-            dc = steer_corrected(delta_m, x[KD], x[BD])
-            tn = math.tan(dc)
-            q = c.lr * tn / L
-            beta[k] = kinematic_beta(dc, lf, c.lr)
-            dbeta = (c.lr / L) * (1.0 + tn * tn) / (1.0 + q * q)
-            j_k = -dc / k1
-            j_b = -1.0 / k1
-            var_dc = (j_k * j_k * P[KD, KD] + 2.0 * j_k * j_b * P[KD, BD] + j_b * j_b * P[BD, BD]
-                      + tu.steer_noise**2)
-            slip = c.slip_gain * abs(x[V] * x[R])
-            beta_var[k] = dbeta * dbeta * var_dc + slip * slip
-        else:
-            beta_var[k] = (c.lr / L * 0.5) ** 2  # no steering yet: +-0.5 rad of road wheel
-    return xs, vs, cov_en, beta, beta_var, flags
-
-
-# ------------------------------------------------------------------------------------------
-# initial alignment
-# ------------------------------------------------------------------------------------------
-def _held(values: FloatArray) -> FloatArray:
-    """Linear interpolation over NaN (held at the ends); zeros when the column is empty."""
-    ok = np.isfinite(values)
-    if not ok.any():
-        return np.zeros_like(values)
-    idx = np.arange(values.size)
-    return np.interp(idx, idx[ok], values[ok])
-
-
-def initial_alignment(
-    t: FloatArray,
-    v_rl: FloatArray,
-    v_rr: FloatArray,
-    steer: FloatArray,
-    gnss_e: FloatArray,
-    gnss_n: FloatArray,
-    vehicle: Vehicle,
-) -> dict[str, Any]:
-    """Yaw and CG position at the first row by fitting dead reckoning to GNSS fixes.
-
-    Dead reckoning with speed from eq 2.5 and yaw rate from the steering, eq 2.2 (the rear-wheel
-    difference, eq 2.6, is not used here: an uncalibrated 0.5 % left/right tyre-radius
-    difference is a yaw-rate error of 0.06 rad/s at 10 m/s), heading 0 at row 0, gives a track
-    in a frame rotated by the unknown initial yaw.  Once it has travelled ``ALIGN_DISTANCE_M``,
-    the rotation theta and translation c that best map the dead-reckoned antenna track onto
-    the GNSS fixes (least squares, 2-D Kabsch) give yaw0 = theta and the CG at row 0 = c.
-    Without steering samples eq 2.6 is used.  Returns a dict with ``ok``, ``yaw0``,
-    ``yaw0_std``, ``e0``, ``n0``, ``t_aligned``, ``residual_m``.
-    """
-    fixes = np.flatnonzero(np.isfinite(gnss_e) & np.isfinite(gnss_n))
-    out: dict[str, Any] = {"ok": False, "yaw0": 0.0, "yaw0_std": math.pi, "t_aligned": None,
-                           "residual_m": None}
-    if fixes.size == 0:
-        out.update(e0=0.0, n0=0.0)
-        return out
-    out.update(e0=float(gnss_e[fixes[0]]), n0=float(gnss_n[fixes[0]]))
-    v = rear_axle_speed(_held(v_rl), _held(v_rr))
-    if np.isfinite(steer).any():
-        r = steer_yaw_rate(v, _held(steer), vehicle.wheelbase)
-    else:
-        r = rear_axle_yaw_rate(_held(v_rl), _held(v_rr), vehicle.track_rear)
-    dt = np.diff(t, prepend=t[0])
-    psi = np.cumsum(r * dt)
-    de, dn = enu_rate(v, vehicle.lr * r, psi)
-    pe = np.cumsum(de * dt)
-    pn = np.cumsum(dn * dt)
-    ax, ay = vehicle.gnss_xyz[0], vehicle.gnss_xyz[1]
-    oe, on = lever_arm_enu(psi, ax, ay)
-    ae, an = pe + oe, pn + on  # dead-reckoned antenna track, heading frame of row 0
-    travelled = np.hypot(ae[fixes] - ae[fixes[0]], an[fixes] - an[fixes[0]])
-    far = np.flatnonzero(travelled >= ALIGN_DISTANCE_M)
-    if far.size == 0:
-        return out
-    j1 = fixes[far[0]]
-    use = fixes[(fixes <= j1) & (t[fixes] >= t[j1] - ALIGN_WINDOW_S)]
-    a = np.column_stack([ae[use], an[use]])
-    b = np.column_stack([gnss_e[use], gnss_n[use]])
-    a_c = a - a.mean(axis=0)
-    b_c = b - b.mean(axis=0)
-    cross = np.sum(a_c[:, 0] * b_c[:, 1] - a_c[:, 1] * b_c[:, 0])
-    dot = np.sum(a_c[:, 0] * b_c[:, 0] + a_c[:, 1] * b_c[:, 1])
-    theta = math.atan2(cross, dot)
-    rot = np.array([[math.cos(theta), -math.sin(theta)], [math.sin(theta), math.cos(theta)]])
-    shift = b.mean(axis=0) - rot @ a.mean(axis=0)
-    resid = b - (a @ rot.T + shift)
-    rms = float(np.sqrt(np.mean(np.sum(resid**2, axis=1)) / 2.0))
-    spread = float(np.sqrt(np.mean(np.sum(a_c**2, axis=1))))
-    # heading 1-sigma: fit noise over the spread of the track, GNSS drift over the stretch
-    # (about 1 m over 30 m), and the dead-reckoned heading change's error (steering scale
-    # and understeer, 10 %), at least 1 deg.
-    turn = float(np.max(psi[: j1 + 1]) - np.min(psi[: j1 + 1]))
-    yaw_std = math.hypot(
-        rms / max(spread * math.sqrt(use.size), 1e-3), 1.0 / ALIGN_DISTANCE_M, 0.1 * turn
-    )
-    out.update(
-        ok=True,
-        yaw0=float(math.atan2(math.sin(theta), math.cos(theta))),
-        yaw0_std=max(yaw_std, math.radians(1.0)),
-        e0=float(shift[0]),
-        n0=float(shift[1]),
-        t_aligned=float(t[j1]),
-        residual_m=rms,
-    )
-    return out
+    nis_steer: FloatArray
+    nis_gyro: FloatArray
+    nis_gnss: FloatArray
 
 
 # ------------------------------------------------------------------------------------------
@@ -692,17 +269,30 @@ def _vehicle_model_numbers(vehicle: Vehicle, tuning: EkfTuning) -> tuple[float, 
     kus = vehicle.understeer_gradient
     if math.isfinite(kus):
         kus = min(max(kus, -0.002), 0.01)
-        kus_std = max(tuning.init_understeer_rel * abs(kus), tuning.init_understeer_min)
+        kus_std = max(tuning.understeer_prior_sigma_rel * abs(kus), tuning.understeer_prior_sigma_min)
     else:
-        kus = tuning.understeer_gradient
-        kus_std = tuning.init_understeer_default
+        kus = tuning.understeer_prior_rad_m_s2
+        kus_std = tuning.understeer_prior_sigma_default
     slip = vehicle.mass * vehicle.lf / (vehicle.wheelbase * vehicle.cr)
     if not math.isfinite(slip) or slip <= 0.0:
-        slip = tuning.slip_gain
+        slip = tuning.slip_gain_s2_m
     return kus, kus_std, min(slip, 0.05)
 
 
 rear_track = typical.track_rear  # the file's rear track, else its front track, else typical
+
+
+def _gyro_sigma(drive: Drive, tu: EkfTuning) -> tuple[float, str]:
+    """Per-sample gyro 1-sigma (rad/s) at the drive's rate and its source."""
+    if tu.preset == "auto" and "wz" in drive:
+        ident = white_noise_sigma_100hz(drive.t, drive["wz"])
+        if ident is not None:
+            # the gyro's measurement noise here also stands for its bias instability between
+            # GNSS fixes: the identified white noise raises the typical value, never lowers it
+            rate_factor = math.sqrt(0.01 / max(drive.dt_median, 1e-4))
+            sigma = max(ident * rate_factor, tu.gyro_sigma_rad_s)
+            return sigma, "drive (second differences), >= typical"
+    return tu.gyro_sigma_rad_s, "typical"
 
 
 def run_ekf(
@@ -714,22 +304,24 @@ def run_ekf(
     if not math.isfinite(vehicle.track_rear):
         vehicle = vehicle.with_changes(track_rear=rear_track(vehicle)[0])
     t = drive.t
-    nan = np.full(t.size, np.nan)
-    v_rl = drive["v_rl"] if "v_rl" in drive else nan
-    v_rr = drive["v_rr"] if "v_rr" in drive else nan
-    steer = drive["steer"] if "steer" in drive else nan
-    wz = drive["wz"] if (use_gyro and "wz" in drive) else nan
-    ge = drive["gnss_e"] if "gnss_e" in drive else nan
-    gn = drive["gnss_n"] if "gnss_n" in drive else nan
-    gstd = drive["gnss_pos_std"] if "gnss_pos_std" in drive else nan
+    v_rl = gnss.column(drive, "v_rl")
+    v_rr = gnss.column(drive, "v_rr")
+    steer = gnss.column(drive, "steer")
+    wz = gnss.column(drive, "wz") if use_gyro else np.full(t.size, np.nan)
+    ge = gnss.column(drive, "gnss_e")
+    gn = gnss.column(drive, "gnss_n")
+    gstd = gnss.column(drive, "gnss_pos_std")
+    pos = gnss.position_samples(drive)
     fixes = np.isfinite(ge) & np.isfinite(gn)
     std_ok = np.isfinite(gstd) & (gstd > 0) & fixes
-    sigma_gnss = float(np.median(gstd[std_ok])) if std_ok.any() else tu.gnss_std
+    sigma_gnss = pos.median_sigma() if std_ok.any() else tu.gnss_pos_sigma_m
+    if use_gyro:
+        tu = dataclasses.replace(tu, gyro_sigma_rad_s=_gyro_sigma(drive, tu)[0])
 
     align = initial_alignment(t, v_rl, v_rr, steer, ge, gn, vehicle)
     kus, kus_std, slip = _vehicle_model_numbers(vehicle, tu)
     ant = vehicle.gnss_xyz
-    consts = _Consts(
+    consts = LoopConsts(
         lr=float(vehicle.lr),
         wheelbase=float(vehicle.wheelbase),
         track_rear=float(vehicle.track_rear),
@@ -737,13 +329,14 @@ def run_ekf(
         ant_y=float(ant[1]),
         ant_z=float(ant[2]),
         slip_gain=float(slip),
-        road_std=float(max(abs(kus), tu.understeer_gradient) * G * tu.road_bank),
-        wheels_unsigned=bool(not (np.nan_to_num(v_rl) < 0.0).any()
-                             and not (np.nan_to_num(v_rr) < 0.0).any()),
+        road_std=float(max(abs(kus), tu.understeer_prior_rad_m_s2) * G * tu.road_bank_sigma),
+        wheels_unsigned=bool(
+            not (np.nan_to_num(v_rl) < 0.0).any() and not (np.nan_to_num(v_rr) < 0.0).any()
+        ),
         gnss_white_default=float(tu.gnss_white_fraction * sigma_gnss),
         gnss_gm_std=float(tu.gnss_gm_fraction * sigma_gnss),
         use_gyro=bool(use_gyro and np.isfinite(wz).any()),
-        tuning=tu,
+        tuning=_loop_tuning(tu),
     )
     ws = rear_axle_speed(v_rl, v_rr)
     ws_ok = np.isfinite(ws)
@@ -757,31 +350,55 @@ def run_ekf(
             pos_var,
             pos_var,
             align["yaw0_std"] ** 2,
-            tu.init_speed**2,
-            tu.init_yaw_rate**2,
-            tu.init_wheel_sf**2,
-            tu.init_wheel_sf_diff**2,
-            tu.init_steer_sf**2,
-            tu.init_steer_offset**2,
+            tu.init_speed_sigma_m_s**2,
+            tu.init_yaw_rate_sigma_rad_s**2,
+            tu.init_wheel_scale_sigma**2,
+            tu.init_wheel_scale_diff_sigma**2,
+            tu.init_steer_scale_sigma**2,
+            tu.init_steer_offset_sigma_rad**2,
             kus_std**2,
             consts.road_std**2,
             consts.gnss_gm_std**2,
             consts.gnss_gm_std**2,
-            tu.init_gyro_bias**2 if consts.use_gyro else 0.0,
+            tu.init_gyro_bias_sigma_rad_s**2 if consts.use_gyro else 0.0,
         ]
     )
     # the GNSS error and the position start fully correlated (position came from GNSS)
     P0[E, GE] = P0[GE, E] = -0.9 * consts.gnss_gm_std**2 if fixes.any() else 0.0
     P0[N, GN] = P0[GN, N] = P0[E, GE]
-    xs, vs, cov_en, beta, beta_var, flags = _ekf_loop(
-        t, v_rl, v_rr, steer, wz, ge, gn, gstd, x0, P0, consts
-    )
-    return EkfResult(xs, vs, cov_en, beta, beta_var, flags, align)
+    out = ekf_loop(t, v_rl, v_rr, steer, wz, ge, gn, gstd, x0, P0, consts)
+    return EkfResult(*out[:6], align, *out[6:])
 
 
-def _estimate(name: str, res: EkfResult, drive: Drive, vehicle: Vehicle, use_gyro: bool) -> Estimate:
+def _estimate(
+    name: str, res: EkfResult, drive: Drive, vehicle: Vehicle, use_gyro: bool, tu: EkfTuning
+) -> Estimate:
     x, var = res.x, res.var
+    t = drive.t
     sd = np.sqrt(np.maximum(var, 0.0))
+    inflation = np.ones(t.size)
+    health = np.zeros(t.size)
+    health_params: dict[str, Any] = {"criterion": "off"}
+    nis_sum = np.nan_to_num(res.nis_steer) + np.nan_to_num(res.nis_gyro) + np.nan_to_num(res.nis_gnss)
+    dof = (np.isfinite(res.nis_steer).astype(float) + np.isfinite(res.nis_gyro)
+           + 2.0 * np.isfinite(res.nis_gnss))  # fmt: skip
+    if tu.consistency_window_s > 0:
+        cons = binned_nis_consistency(t, nis_sum, dof, tu.consistency_window_s)
+        inflation, health, health_params = cons.inflation, cons.health, cons.summary(t)
+    k = np.sqrt(inflation)
+    # road bank: the car crabs by k_slip g sin(bank) on a bank while the driver holds
+    # delta = K_us g sin(bank) (read by eq 2.3 as lr/L delta of sideslip); the bank from the
+    # accelerometer when the drive has ay, else the typical road bank of the tuning
+    cue = gravity_lateral_sin(drive, x[:, V], x[:, R])
+    sin_bank = np.full(t.size, tu.road_bank_sigma) if cue is None else np.hypot(0.01, cue)
+    _, _, slip_gain = _vehicle_model_numbers(vehicle, tu)
+    lr_l = vehicle.lr / vehicle.wheelbase
+    bank_beta = (slip_gain + lr_l * np.abs(x[:, KU])) * G * sin_bank
+    # the kinematic model's own error, the rear-axle slip angle ~ k_slip |a_y| (a_y ~ v r),
+    # at least its RMS over the last SLIP_WINDOW_S (transients shift its phase)
+    ay = x[:, V] * x[:, R]
+    slip = slip_gain * np.maximum(np.abs(ay), np.sqrt(causal_mean(t, ay**2, SLIP_WINDOW_S)))
+    beta_std = np.sqrt(np.maximum(res.beta_var, 0.0) * inflation + slip**2 + bank_beta**2)
     series = {
         "e": x[:, E],
         "n": x[:, N],
@@ -790,42 +407,49 @@ def _estimate(name: str, res: EkfResult, drive: Drive, vehicle: Vehicle, use_gyr
         "r": x[:, R],
         "vx": x[:, V],
         "vy": vehicle.lr * x[:, R],
-        "e_std": sd[:, E],
-        "n_std": sd[:, N],
-        "yaw_std": sd[:, PSI],
-        "beta_std": np.sqrt(np.maximum(res.beta_var, 0.0)),
+        "e_std": sd[:, E] * k,
+        "n_std": sd[:, N] * k,
+        "yaw_std": sd[:, PSI] * k,
+        "beta_std": beta_std,
         "vx_std": sd[:, V],
-        "r_std": sd[:, R],
+        "r_std": sd[:, R] * k,
+        "health": health,
     }
     if use_gyro:
         series["gyro_bias"] = x[:, BG]
         series["gyro_bias_std"] = sd[:, BG]
     last = -1
     params: dict[str, Any] = {
-        "wheel_scale_factor": float(x[last, SW]),
-        "wheel_scale_factor_std": float(sd[last, SW]),
-        "wheel_scale_factor_rl": float(x[last, SW] - x[last, DW]),
-        "wheel_scale_factor_rr": float(x[last, SW] + x[last, DW]),
-        "wheel_scale_factor_diff": float(x[last, DW]),
-        "wheel_scale_factor_diff_std": float(sd[last, DW]),
-        "steer_scale_factor": float(x[last, KD]),
-        "steer_scale_factor_std": float(sd[last, KD]),
-        "steer_offset": float(x[last, BD]),
-        "steer_offset_std": float(sd[last, BD]),
-        "understeer_gradient": float(x[last, KU]),
-        "understeer_gradient_std": float(sd[last, KU]),
-        "scale_factor_convention": "measured = (1 + scale_factor) * true + offset",
+        "wheel_speed_scale": float(1.0 + x[last, SW]),
+        "wheel_speed_scale_sigma": float(sd[last, SW]),
+        "wheel_speed_scale_rl": float(1.0 + x[last, SW] - x[last, DW]),
+        "wheel_speed_scale_rr": float(1.0 + x[last, SW] + x[last, DW]),
+        "wheel_speed_scale_half_diff": float(x[last, DW]),
+        "wheel_speed_scale_half_diff_sigma": float(sd[last, DW]),
+        "steer_scale": float(1.0 + x[last, KD]),
+        "steer_scale_sigma": float(sd[last, KD]),
+        "steer_offset_rad": float(x[last, BD]),
+        "steer_offset_rad_sigma": float(sd[last, BD]),
+        "understeer_gradient_rad_m_s2": float(x[last, KU]),
+        "understeer_gradient_rad_m_s2_sigma": float(sd[last, KU]),
+        "scale_convention": "scale = measured / true (1.0 = perfect); offset in the sensor's unit",
         "gnss_fixes_used": int(np.sum(res.gnss_flag == GNSS_USED)),
         "gnss_fixes_rejected": int(np.sum(res.gnss_flag == GNSS_REJECTED)),
         "gnss_fixes_forced": int(np.sum(res.gnss_flag == GNSS_FORCED)),
         "alignment": {k: v for k, v in res.align.items()},
         "track_rear_m": rear_track(vehicle)[0],
         "track_rear_source": rear_track(vehicle)[1],
+        "health": health_params,
+        "settings": settings_dict(tu),
     }
     if use_gyro:
-        params["gyro_bias"] = float(x[last, BG])
-        params["gyro_bias_std"] = float(sd[last, BG])
-    return Estimate(name, drive.t, series, params)
+        g_sigma, g_source = _gyro_sigma(drive, tu)
+        params["gyro_bias_rad_s"] = float(x[last, BG])
+        params["gyro_bias_rad_s_sigma"] = float(sd[last, BG])
+        params["noise"] = {"gyro_sigma_rad_s": g_sigma, "gyro_sigma_source": g_source,
+                           "criterion": "gyro white noise from second differences of wz"}  # fmt: skip
+    innovations = {"steer_nis": res.nis_steer, "gyro_nis": res.nis_gyro, "gnss_nis": res.nis_gnss}
+    return Estimate(name, t, series, params, innovations)
 
 
 _COLUMNS = ("v_rl", "v_rr", "steer", "gnss_e", "gnss_n")
@@ -839,10 +463,12 @@ _VEHICLE = ("lf", "lr")  # the rear track: see rear_track()
     summary="EKF on the kinematic bicycle: rear wheel speeds + steering + GNSS (positions, "
     "scale factors)",
     paper="seed 004",
+    settings=EkfTuning,
 )
-def ekf_wss_sas(drive: Drive, vehicle: Vehicle) -> Estimate:
+def ekf_wss_sas(drive: Drive, vehicle: Vehicle, settings: EkfTuning | None = None) -> Estimate:
     """Seed 004's GNSS/WSS/SAS EKF (see module docstring); optional column gnss_pos_std."""
-    return _estimate("ekf_wss_sas", run_ekf(drive, vehicle, False), drive, vehicle, False)
+    tu = settings if settings is not None else EkfTuning()
+    return _estimate("ekf_wss_sas", run_ekf(drive, vehicle, False, tu), drive, vehicle, False, tu)
 
 
 @register(
@@ -851,7 +477,9 @@ def ekf_wss_sas(drive: Drive, vehicle: Vehicle) -> Estimate:
     vehicle_params=_VEHICLE,
     summary="seed 004's EKF plus the gyro yaw rate with a bias state",
     paper="seed 004 (+ gyro)",
+    settings=EkfTuning,
 )
-def ekf_wss_sas_imu(drive: Drive, vehicle: Vehicle) -> Estimate:
+def ekf_wss_sas_imu(drive: Drive, vehicle: Vehicle, settings: EkfTuning | None = None) -> Estimate:
     """Seed 004's EKF with the gyro as a yaw-rate measurement (``wz = r + b_g``)."""
-    return _estimate("ekf_wss_sas_imu", run_ekf(drive, vehicle, True), drive, vehicle, True)
+    tu = settings if settings is not None else EkfTuning()
+    return _estimate("ekf_wss_sas_imu", run_ekf(drive, vehicle, True, tu), drive, vehicle, True, tu)

@@ -2,7 +2,7 @@
 cross-checks and the speed ratio of ``sideslip bench``.
 
 The problem (discretised model table, inputs, measurements, prior) is assembled by
-:func:`sideslip.methods.kalman_gps.mkf_problem`, so only the recursion differs: FilterPy's
+:func:`sideslip.methods.mkf.mkf_problem`, so only the recursion differs: FilterPy's
 ``predict(u, B, F, Q)`` and ``update(z, R, H)`` (Joseph form) per row, with the same order of
 scalar updates as ours (standstill pseudo-measurement r = 0, gyro, GNSS course).  The course
 innovation is wrapped to [-pi, pi) as ours by passing z = H x + wrap(nu - H x).
@@ -18,7 +18,7 @@ from filterpy.kalman import KalmanFilter
 from numpy.typing import NDArray
 
 from sideslip.drive import Drive
-from sideslip.methods.kalman_gps import SIGMA_ZERO_RATE, MkfProblem, mkf_problem
+from sideslip.methods.mkf import SIGMA_ZERO_RATE, MkfProblem, mkf_problem
 from sideslip.vehicle import Vehicle
 
 PEER_FOR = ("mkf",)

@@ -1,0 +1,290 @@
+"""The GNSS measurement layer: course, speed, position and Doppler samples of a drive.
+
+Every method that reads GNSS takes its samples from here, so that the speed gate, the receiver
+sigma defaults, the course noise model and the Gauss-Markov error model are written once.
+
+Conventions (contract section 1): GNSS columns hold a value on the rows where the receiver
+delivered a fix and NaN elsewhere; positions ``gnss_e``/``gnss_n`` (m, local ENU), Doppler
+velocity ``gnss_ve``/``gnss_vn`` (m/s), receiver 1-sigmas ``gnss_pos_std`` (m, per horizontal
+axis) and ``gnss_vel_std`` (m/s, per horizontal axis).  Missing columns read as all-NaN
+(:func:`column`); missing or non-positive receiver sigmas fall back to
+:data:`POS_SIGMA_DEFAULT_M` / :data:`VEL_SIGMA_DEFAULT_M_S`.
+
+Course noise (one model for every method): with independent velocity errors of 1-sigma
+``sigma_v`` per axis, the course atan2(v_n, v_e) has 1-sigma ``sigma_v / V`` (first order in
+sigma_v / V), to which an antenna / multipath floor :data:`COURSE_SIGMA_FLOOR_RAD` adds in
+quadrature:  ``sigma_course = hypot(sigma_v / V, floor)``.  Samples are used above a speed gate
+(the first-order model needs sigma_v << V; each method passes its gate, default
+:data:`COURSE_MIN_SPEED_M_S`) and while ``sigma_course`` is below
+:data:`COURSE_SIGMA_MAX_RAD` (a receiver that says its velocity is poor is not a heading
+sensor).
+
+GNSS error as a first-order Gauss-Markov process  e' = -e / tau + w  with stationary 1-sigma
+``sigma``: exactly discretised over a step dt as  e_k+1 = phi e_k + w_k,  phi = exp(-dt/tau),
+var(w_k) = sigma^2 (1 - phi^2)  (:func:`gauss_markov`; Brown & Hwang, *Introduction to Random
+Signals and Applied Kalman Filtering*, 4th ed., 2012, sec. 4.2).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numba
+import numpy as np
+from numpy.typing import NDArray
+
+from sideslip.drive import Drive
+from sideslip.frames import wrap_angle
+from sideslip.signals import hold
+from sideslip.vehicle import Vehicle
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.intp]
+
+VEL_SIGMA_DEFAULT_M_S = 0.1  # Doppler velocity 1-sigma per axis when the drive gives none
+POS_SIGMA_DEFAULT_M = 1.5  # standalone code-phase position 1-sigma per axis when none given
+POS_WHITE_FRACTION = 0.45  # share of the position 1-sigma that is white from fix to fix
+COURSE_SIGMA_FLOOR_RAD = math.radians(0.1)  # antenna / multipath floor of the Doppler course
+COURSE_SIGMA_MAX_RAD = math.radians(5.0)  # poorer course samples are not used
+COURSE_MIN_SPEED_M_S = 3.0  # default speed gate of the course
+
+
+def column(drive: Drive, name: str) -> FloatArray:
+    """The column ``name`` of the drive, or all-NaN (no sample anywhere) when it is absent."""
+    if name in drive:
+        return np.asarray(drive[name], dtype=float)
+    return np.full(len(drive), np.nan)
+
+
+def _sigma_or_default(values: FloatArray, default: float) -> FloatArray:
+    return np.where(np.isfinite(values) & (values > 0), values, default)
+
+
+def gauss_markov(dt: float | FloatArray, tau_s: float, sigma: float) -> tuple[FloatArray, FloatArray]:
+    """Exact discretisation of a first-order Gauss-Markov error of time constant ``tau_s``
+    and stationary 1-sigma ``sigma`` over ``dt``: returns ``(phi, q)`` with
+    ``phi = exp(-dt / tau)`` and the discrete driving-noise variance ``q = sigma^2 (1 - phi^2)``
+    (module docstring).  ``tau_s = inf`` gives a constant (phi = 1, q = 0)."""
+    d = np.asarray(dt, dtype=float)
+    phi = np.exp(-d / tau_s) if math.isfinite(tau_s) and tau_s > 0 else np.ones_like(d)
+    if math.isfinite(tau_s) and tau_s <= 0:
+        phi = np.zeros_like(d)
+    return phi, sigma * sigma * (1.0 - phi * phi)
+
+
+@dataclass(frozen=True)
+class VelocitySamples:
+    """GNSS horizontal velocity at the rows with a sample.  ``source``: 'doppler' or
+    'positions' (differenced fixes, assigned to the later fix), '' when the drive has none."""
+
+    rows: IntArray
+    ve: FloatArray
+    vn: FloatArray
+    sigma: FloatArray  # m/s per axis
+    source: str
+
+    @property
+    def speed(self) -> FloatArray:
+        return np.hypot(self.ve, self.vn)
+
+
+def velocity_samples(drive: Drive, use_positions: bool = True) -> VelocitySamples:
+    """Doppler velocity, else (``use_positions``) differenced GNSS positions.
+
+    The 1-sigma is ``gnss_vel_std`` (default :data:`VEL_SIGMA_DEFAULT_M_S`) for Doppler and
+    sqrt(2) w sigma_pos / dt for differenced fixes, w = :data:`POS_WHITE_FRACTION` the share of
+    the position error that changes from fix to fix (the slow part cancels in the difference;
+    the same split as the seed-004 EKF's GNSS model).
+    """
+    empty = VelocitySamples(np.zeros(0, dtype=np.intp), np.zeros(0), np.zeros(0), np.zeros(0), "")
+    if "gnss_ve" in drive and "gnss_vn" in drive:
+        ve, vn = drive["gnss_ve"], drive["gnss_vn"]
+        rows = np.flatnonzero(np.isfinite(ve) & np.isfinite(vn))
+        sig = _sigma_or_default(column(drive, "gnss_vel_std")[rows], VEL_SIGMA_DEFAULT_M_S)
+        return VelocitySamples(rows, ve[rows], vn[rows], sig, "doppler")
+    if not use_positions or "gnss_e" not in drive or "gnss_n" not in drive:
+        return empty
+    pos = position_samples(drive)
+    if pos.rows.size < 2:
+        return empty
+    dt = np.diff(drive.t[pos.rows])
+    ve = np.diff(pos.e) / dt
+    vn = np.diff(pos.n) / dt
+    sig = math.sqrt(2.0) * POS_WHITE_FRACTION * np.maximum(pos.sigma[1:], pos.sigma[:-1]) / dt
+    return VelocitySamples(pos.rows[1:], ve, vn, sig, "positions")
+
+
+@dataclass(frozen=True)
+class CourseSamples:
+    """Fresh GNSS course over ground at the rows that pass the gates.
+
+    ``course`` (rad, ENU from East counter-clockwise, of the vehicle's heading direction: turned
+    by pi where it reverses), ``speed`` (m/s, GNSS horizontal speed), ``sigma`` (rad, 1-sigma of
+    the course, module docstring), ``reversing`` (bool per sample).
+    """
+
+    rows: IntArray
+    course: FloatArray
+    speed: FloatArray
+    sigma: FloatArray
+    reversing: NDArray[np.bool_]
+
+
+def course_sigma(vel_sigma: FloatArray, speed: FloatArray) -> FloatArray:
+    """1-sigma (rad) of a Doppler course: hypot(sigma_v / V, :data:`COURSE_SIGMA_FLOOR_RAD`)."""
+    return np.hypot(vel_sigma / np.maximum(speed, 1e-9), COURSE_SIGMA_FLOOR_RAD)
+
+
+def course_samples(
+    drive: Drive,
+    signed_speed: FloatArray | None = None,
+    min_speed: float = COURSE_MIN_SPEED_M_S,
+    use_positions: bool = True,
+    max_sigma: float = COURSE_SIGMA_MAX_RAD,
+) -> CourseSamples:
+    """GNSS course samples above the speed gate ``min_speed`` (m/s) and below ``max_sigma``.
+
+    ``signed_speed`` (per row, e.g. signed wheel speeds): where given, a sample is used only
+    when ``|signed_speed|`` also exceeds the gate (the vehicle's own speed confirms the GNSS
+    speed), and its course is turned by pi where ``signed_speed < 0`` (reversing), so that
+    course = yaw + beta holds.  Without Doppler velocity the course comes from differenced
+    positions (``use_positions``).
+    """
+    vel = velocity_samples(drive, use_positions)
+    speed = vel.speed
+    keep = np.isfinite(speed) & (speed > min_speed)
+    rev = np.zeros(vel.rows.size, dtype=bool)
+    if signed_speed is not None:
+        s = np.asarray(signed_speed, dtype=float)[vel.rows]
+        keep &= np.abs(s) > min_speed
+        rev = s < 0.0
+    sig = course_sigma(vel.sigma, speed)
+    keep &= sig <= max_sigma
+    course = np.arctan2(vel.vn[keep], vel.ve[keep])
+    rev = rev[keep]
+    course = np.where(rev, wrap_angle(course + np.pi), course)
+    return CourseSamples(vel.rows[keep], course, speed[keep], sig[keep], rev)
+
+
+@dataclass(frozen=True)
+class SpeedSamples:
+    """GNSS horizontal speed (m/s) and its 1-sigma at the rows with a sample."""
+
+    rows: IntArray
+    speed: FloatArray
+    sigma: FloatArray
+
+
+def speed_samples(drive: Drive, use_positions: bool = True) -> SpeedSamples:
+    """GNSS ground speed |v| with the per-axis velocity 1-sigma (|v| has the same 1-sigma to
+    first order when sigma_v << V)."""
+    vel = velocity_samples(drive, use_positions)
+    return SpeedSamples(vel.rows, vel.speed, vel.sigma)
+
+
+@dataclass(frozen=True)
+class PositionSamples:
+    """GNSS fixes: rows, ``e``/``n`` (m, ENU) and their 1-sigma per axis (m)."""
+
+    rows: IntArray
+    e: FloatArray
+    n: FloatArray
+    sigma: FloatArray
+
+    def median_sigma(self) -> float:
+        """Median receiver 1-sigma of the fixes (the default when there are none)."""
+        return float(np.median(self.sigma)) if self.sigma.size else POS_SIGMA_DEFAULT_M
+
+
+def position_samples(drive: Drive) -> PositionSamples:
+    """GNSS position fixes with ``gnss_pos_std`` (default :data:`POS_SIGMA_DEFAULT_M`)."""
+    e, n = column(drive, "gnss_e"), column(drive, "gnss_n")
+    rows = np.flatnonzero(np.isfinite(e) & np.isfinite(n))
+    sig = _sigma_or_default(column(drive, "gnss_pos_std")[rows], POS_SIGMA_DEFAULT_M)
+    return PositionSamples(rows, e[rows], n[rows], sig)
+
+
+def doppler_samples(drive: Drive) -> VelocitySamples:
+    """Doppler velocity samples only (never differenced positions)."""
+    return velocity_samples(drive, use_positions=False)
+
+
+@numba.njit(cache=True)
+def course_outliers(
+    t: NDArray, rows: NDArray, course: NDArray, sigma: NDArray, wz: NDArray,
+    n_sigma: float, beta_rate: float, max_run: int,
+) -> NDArray:  # fmt: skip
+    """Multipath test of course samples against the gyro: a sample whose change since the last
+    accepted one differs from the gyro-integrated heading change by more than ``n_sigma``
+    combined sigmas plus a sideslip allowance ``beta_rate`` * dt (rad/s * s) is rejected;
+    after ``max_run`` rejections in a row the next is accepted (re-synchronises after a real
+    jump).  Returns a bool mask over ``rows`` (True = outlier)."""
+    bad = np.zeros(rows.size, dtype=np.bool_)
+    last = -1
+    run = 0
+    for i in range(rows.size):
+        if last < 0:
+            last = i
+            continue
+        a, b = rows[last], rows[i]
+        turn = 0.0
+        for k in range(a, b):
+            if np.isfinite(wz[k]):
+                turn += wz[k] * (t[k + 1] - t[k])
+        d = (course[i] - course[last] - turn + np.pi) % (2.0 * np.pi) - np.pi
+        lim = n_sigma * np.sqrt(sigma[i] ** 2 + sigma[last] ** 2) + beta_rate * (t[b] - t[a])
+        if abs(d) > lim and run < max_run:
+            bad[i] = True
+            run += 1
+        else:
+            last = i
+            run = 0
+    return bad
+
+
+# multipath test of the course against the gyro (used by the seed-001 filters)
+OUTLIER_SIGMAS = 4.0  # course sample rejected beyond this many sigma of the gyro-predicted step
+OUTLIER_BETA_RATE = 0.2  # rad/s: allowance for the sideslip change between two course samples
+OUTLIER_MAX_RUN = 5  # after this many rejections in a row the next sample is accepted (re-sync)
+
+
+@dataclass(frozen=True)
+class CourseAtCg:
+    """Fresh GNSS course on the drive's rows (NaN where none), referred to the CG.
+
+    ``course``: rad, the antenna's roll-rate lever-arm term removed; ``sigma``: 1-sigma (rad);
+    ``hr``: the yaw-rate lever-arm coefficient rx/V (s) of the measurement model
+    nu_ant = psi + beta + (rx/V) r - (rz/V) p  (v_y,ant = v_y + r rx - p rz).
+    """
+
+    course: FloatArray
+    sigma: FloatArray
+    hr: FloatArray
+
+
+def course_at_cg(
+    drive: Drive, vehicle: Vehicle, speed: FloatArray, min_speed: float = COURSE_MIN_SPEED_M_S
+) -> CourseAtCg:
+    """Course samples (:func:`course_samples`, speed confirmed by the signed ``speed``) on every
+    row, with the roll-rate lever-arm term removed using ``wx`` when the drive has it, and the
+    multipath outliers of :func:`course_outliers` (against ``wz``) dropped."""
+    n = len(drive)
+    course = np.full(n, np.nan)
+    sigma = np.full(n, np.nan)
+    hr = np.zeros(n)
+    cs = course_samples(drive, speed, min_speed)
+    rows, nu, gspeed, sig, rev = cs.rows, cs.course, cs.speed, cs.sigma, cs.reversing
+    rx, _, rz = (float(c) for c in vehicle.gnss_xyz)
+    if "wx" in drive and rz != 0.0:
+        p, _ = hold(drive["wx"], drive.t)
+        nu = nu + rz * p[rows] / gspeed
+    if "wz" in drive and rows.size:
+        bad = course_outliers(
+            drive.t, rows, nu, sig, drive["wz"], OUTLIER_SIGMAS, OUTLIER_BETA_RATE, OUTLIER_MAX_RUN
+        )
+        rows, nu, sig, rev, gspeed = rows[~bad], nu[~bad], sig[~bad], rev[~bad], gspeed[~bad]
+    course[rows] = wrap_angle(nu)
+    sigma[rows] = sig
+    hr[rows] = np.where(rev, -rx, rx) / gspeed
+    return CourseAtCg(course, sigma, hr)

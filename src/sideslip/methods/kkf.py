@@ -1,0 +1,469 @@
+"""Seed 001: the kinematic Kalman filter ``kkf`` (GPS course minus integrated gyro).
+
+State x = [psi (rad), b_gyro (rad/s), s_gyro (-)]; input: gyro yaw rate w_z (rad/s),
+psi' = (w_z - b_gyro) / (1 + s_gyro) (seed 001 eq 4; the scale-factor state is frozen at 0
+except in the adaptive route of :mod:`sideslip.methods.mkf_adaptive`).  Measurement: GNSS
+Doppler course nu (rad) with H = [1 0 0] *only while driving straight* (then beta ~ 0 so
+nu ~ psi and the bias is observable); in turns the bias is frozen and the gyro integrated.
+Sideslip beta = nu - psi_hat at every fresh GNSS course (eq 6 gives its variance
+sigma_beta^2 = P_psi + sigma_nu^2), held between course samples.  A gyro scale factor
+integrates into beta through every turn.  The GNSS course (CG-referred, multipath-gated) comes
+from :func:`sideslip.gnss.course_at_cg`; the updates from :mod:`sideslip.filters.kalman`.
+
+Straight driving (:func:`straight_flags`): over a causal 1 s window, the bias-corrected
+gyro mean |w_z - b| and the GNSS course rate |d nu/dt| both below ``straight_on_rad_s`` for
+``straight_hold_s`` enter "straight"; either above ``straight_off_rad_s`` -- or the 0.1 s gyro
+mean above it, or speed below the gate, or no recent course -- leaves it at once (hysteresis).
+
+Noise (:class:`KkfSettings`): ``preset="auto"`` (default) takes the gyro white noise from the
+drive (:func:`sideslip.signals.white_noise_sigma_100hz`), ``"typical"`` the fixed 0.3 deg/s at
+100 Hz of seed 001 Table I; the course noise is the receiver's (GNSS layer).  Seed 001 gives no
+further noise values, so there is no "paper" preset.
+
+Honest uncertainty: the KKF's beta error in a turn is the heading error integrated from the gyro
+(scale factor times the heading change since the last straight, plus bias drift), which the
+filter's own P (white gyro noise only) does not contain.  ``beta_std`` therefore adds (i) the
+heading change since the last course update on a straight times ``gyro_scale_rel_sigma``
+(a MEMS gyro's scale-factor uncertainty, 1-sigma); (ii) the sideslip a banked straight
+hides in the heading, k_slip g sin(bank) (k_slip from the vehicle file or
+:mod:`sideslip.typical`); (iii) the body-z gyro's under-reading on a bank, the heading change
+times 1/cos(bank) - 1; the bank comes from the accelerometer
+(:func:`sideslip.signals.gravity_lateral_sin`) when the drive has ``ay``, else
+``road_bank_sigma``.  The windowed NIS of the course updates
+(:func:`sideslip.filters.consistency.nis_consistency`) inflates it where the straights stop
+looking straight.
+
+Low speed, standstill, outages (never NaN): below the gate or when the last course is older
+than ``KKF_MAX_COURSE_AGE_S`` (or 1.5 GNSS intervals) beta falls back to 0 with beta_std
+``KKF_BETA_PRIOR``; at standstill the gyro reads its bias (pseudo-measurement r = 0).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Literal
+
+import numba
+import numpy as np
+from numpy.typing import NDArray
+
+from sideslip import gnss, typical
+from sideslip.drive import Drive
+from sideslip.estimate import Estimate
+from sideslip.filters.kalman import predict_nb, update_scalar_nb
+from sideslip.filters.nis_windows import binned_nis_consistency
+from sideslip.frames import wrap_angle
+from sideslip.methods.mkf import (
+    GNSS_COLUMNS,
+    SIGMA_BIAS0,
+    SIGMA_GYRO_100HZ,
+    SIGMA_PSI0,
+    _wrap,
+    channel_diagnostics,
+    initial_heading,
+)
+from sideslip.methods.registry import SPEED, register
+from sideslip.models.mkf_model import V_GATE
+from sideslip.settings import settings_dict
+from sideslip.signals import (
+    GRAVITY_M_S2,
+    STANDSTILL_SPEED,
+    gravity_lateral_sin,
+    hold,
+    sample_variance,
+    vehicle_speed,
+    white_noise_sigma_100hz,
+)
+from sideslip.vehicle import Vehicle
+
+FloatArray = NDArray[np.float64]
+
+STRAIGHT_ON = 0.01  # rad/s (0.57 deg/s): enter straight below this |yaw rate| and |course rate|
+STRAIGHT_OFF = 0.02  # rad/s: leave straight above this
+STRAIGHT_HOLD_S = 1.0  # s: the on-condition must hold this long
+STRAIGHT_WINDOW_S = 1.0  # s: causal averaging window of yaw rate and course rate (entry)
+STRAIGHT_FAST_S = 0.1  # s: short gyro window that ends 'straight' promptly at a turn entry
+SIGMA_BETA_STRAIGHT = math.radians(0.2)  # rad: beta is not exactly 0 on a straight
+KKF_MAX_COURSE_AGE_S = 1.0  # s: older course -> beta unknown, falls back to 0
+KKF_BETA_PRIOR = math.radians(3.0)  # rad: beta_std when the KKF has no fresh beta
+SIGMA_SCALE0 = 0.05  # 1-sigma prior of the gyro scale factor state (adaptive route)
+Q_BIAS = math.radians(0.005) ** 2  # (rad/s)^2/s: gyro bias random walk
+# the gyro's own straightness test is trusted once the bias 1-sigma is below a third of the
+# 'on' threshold; before that (e.g. a raw phone gyro) the GNSS course rate decides
+BIAS_KNOWN_VAR = (0.01 / 3.0) ** 2
+
+
+@dataclass(frozen=True)
+class KkfSettings:
+    """Noise and options of the KKF.
+
+    preset : "auto" (gyro noise from the drive) or "typical" (module docstring).
+    gyro_sigma_100hz_rad_s : rad/s per gyro sample at 100 Hz; None = from the preset.
+    gyro_bias_psd_rad2_s3 : (rad/s)^2/s, bias random-walk density.
+    gyro_scale_rel_sigma : 1-sigma of the gyro scale factor (measured/true - 1) behind the
+        turn term of beta_std; 0 turns it off.
+    road_bank_sigma : sin of the road bank, 1-sigma, behind the bank terms of beta_std when
+        the drive has no ``ay`` (with ``ay`` the bank is taken from the accelerometer).
+    straight_on_rad_s, straight_off_rad_s, straight_hold_s : straight detector.
+    v_gate_m_s : m/s, course used above this speed only.
+    consistency_window_s : s, window of the NIS test of the course updates (0: off).
+    """
+
+    preset: Literal["auto", "typical"] = "auto"
+    gyro_sigma_100hz_rad_s: float | None = None
+    gyro_bias_psd_rad2_s3: float = Q_BIAS
+    gyro_scale_rel_sigma: float = 0.01
+    road_bank_sigma: float = 0.03
+    straight_on_rad_s: float = STRAIGHT_ON
+    straight_off_rad_s: float = STRAIGHT_OFF
+    straight_hold_s: float = STRAIGHT_HOLD_S
+    v_gate_m_s: float = V_GATE
+    consistency_window_s: float = 10.0
+
+    def __post_init__(self) -> None:
+        if self.preset not in ("auto", "typical"):
+            raise ValueError(f"KkfSettings.preset = {self.preset!r}: expected 'auto' or 'typical'")
+        g = self.gyro_sigma_100hz_rad_s
+        if g is not None and not (math.isfinite(g) and g > 0):
+            raise ValueError(f"KkfSettings.gyro_sigma_100hz_rad_s = {g}: expected a number > 0")
+        for name in ("gyro_bias_psd_rad2_s3", "gyro_scale_rel_sigma", "road_bank_sigma",
+                     "straight_hold_s",
+                     "consistency_window_s"):  # fmt: skip
+            v = getattr(self, name)
+            if not (math.isfinite(v) and v >= 0):
+                raise ValueError(f"KkfSettings.{name} = {v}: expected a number >= 0")
+        if not 0 < self.straight_on_rad_s <= self.straight_off_rad_s:
+            raise ValueError(
+                f"KkfSettings.straight_on_rad_s = {self.straight_on_rad_s}: expected > 0 and "
+                f"<= straight_off_rad_s ({self.straight_off_rad_s})"
+            )
+        if not (math.isfinite(self.v_gate_m_s) and self.v_gate_m_s > STANDSTILL_SPEED):
+            raise ValueError(f"KkfSettings.v_gate_m_s = {self.v_gate_m_s}: expected > 0.1 m/s")
+
+
+def kkf_gyro_sigma(drive: Drive, settings: KkfSettings) -> tuple[float, str]:
+    """Gyro white-noise 1-sigma at 100 Hz (rad/s) and its source."""
+    if settings.gyro_sigma_100hz_rad_s is not None:
+        return settings.gyro_sigma_100hz_rad_s, "settings"
+    if settings.preset == "auto":
+        ident = white_noise_sigma_100hz(drive.t, drive["wz"])
+        if ident is not None:
+            # the heading's process noise must cover every gyro error between two straights
+            # (bias instability, scale times r), of which the white noise is a lower bound:
+            # the drive raises the typical value for a noisy gyro, never lowers it
+            return max(ident, SIGMA_GYRO_100HZ), "drive (second differences of wz), >= typical"
+    return SIGMA_GYRO_100HZ, "typical"
+
+
+def _course_rate(t: FloatArray, course: FloatArray, window_s: float) -> FloatArray:
+    """Causal GNSS course rate (rad/s) on every row: slope of the unwrapped course over the
+    last ``window_s``, held until the next course; NaN when unknown or stale."""
+    n = t.size
+    rows = np.flatnonzero(np.isfinite(course))
+    if rows.size < 2:
+        return np.full(n, np.nan)
+    tc = t[rows]
+    nu = np.unwrap(course[rows])
+    j = np.searchsorted(tc, tc - window_s, side="left")
+    span = tc - tc[j]
+    ok = span >= 0.5 * window_s
+    rate = np.where(ok, (nu - nu[j]) / np.where(span > 0, span, 1.0), np.nan)
+    on_rows = np.full(n, np.nan)
+    on_rows[rows] = np.where(ok, rate, np.nan)
+    held, age = hold(on_rows, t, fill=np.nan)
+    # stale: no fresh course recently (outage / low speed)
+    last_course_age = hold(course, t, fill=np.nan)[1]
+    stale = max(0.5 * window_s, 1.5 * float(np.median(np.diff(tc))))
+    return np.where((age <= window_s) & (last_course_age <= stale), held, np.nan)
+
+
+def _moving_mean(t: FloatArray, x: FloatArray, window_s: float) -> FloatArray:
+    """Causal moving mean over ``window_s`` of the finite samples (held where none)."""
+    v = np.where(np.isfinite(x), x, 0.0)
+    c = np.isfinite(x).astype(float)
+    cv = np.concatenate(([0.0], np.cumsum(v)))
+    cc = np.concatenate(([0.0], np.cumsum(c)))
+    j = np.searchsorted(t, t - window_s, side="right")
+    i = np.arange(t.size) + 1
+    cnt = cc[i] - cc[j]
+    return np.where(cnt > 0, (cv[i] - cv[j]) / np.maximum(cnt, 1.0), 0.0)
+
+
+@numba.njit(cache=True)
+def _straight_step(
+    straight: bool, on_time: float, yaw_dev: float, yaw_dev_fast: float, course_rate: float,
+    speed: float, dt: float, on: float, off: float, hold_s: float, v_gate: float,
+) -> tuple[bool, float]:  # fmt: skip
+    """One step of the straight-driving detector with hysteresis; returns (straight, on_time).
+
+    Entry uses the 1 s means (quiet gyro and course); exit also watches the 0.1 s gyro mean so
+    that a turn entry ends "straight" within ~0.1 s.
+    """
+    known = np.isfinite(course_rate) and speed > v_gate
+    cond_on = known and abs(yaw_dev) < on and abs(yaw_dev_fast) < off and abs(course_rate) < on
+    cond_off = (
+        (not known) or abs(yaw_dev) > off or abs(yaw_dev_fast) > off or abs(course_rate) > off
+    )
+    if straight:
+        if cond_off:
+            return False, 0.0
+        return True, on_time
+    on_time = on_time + dt if cond_on else 0.0
+    return on_time >= hold_s, on_time
+
+
+@numba.njit(cache=True)
+def _straight_loop(
+    t: NDArray, yaw_dev: NDArray, yaw_dev_fast: NDArray, course_rate: NDArray, speed: NDArray,
+    on: float, off: float, hold_s: float, v_gate: float,
+) -> NDArray:  # fmt: skip
+    out = np.zeros(t.size, dtype=np.bool_)
+    s = False
+    on_time = 0.0
+    for k in range(t.size):
+        dt = t[k] - t[k - 1] if k > 0 else 0.0
+        s, on_time = _straight_step(
+            s, on_time, yaw_dev[k], yaw_dev_fast[k], course_rate[k], speed[k], dt, on, off,
+            hold_s, v_gate,
+        )  # fmt: skip
+        out[k] = s
+    return out
+
+
+def straight_flags(
+    t: FloatArray,
+    yaw_rate: FloatArray,
+    course_rate: FloatArray,
+    speed: FloatArray,
+    on: float = STRAIGHT_ON,
+    off: float = STRAIGHT_OFF,
+    hold_s: float = STRAIGHT_HOLD_S,
+    yaw_rate_fast: FloatArray | None = None,
+    v_gate: float = V_GATE,
+) -> NDArray[np.bool_]:
+    """Straight-driving detector of the KKF (the same state machine the filter runs inside).
+
+    ``yaw_rate``: bias-corrected, 1 s averaged gyro yaw rate (rad/s); ``yaw_rate_fast``: the
+    same over 0.1 s (default: ``yaw_rate``); ``course_rate``:
+    GNSS course rate (rad/s, NaN = unknown).  Straight when both stay below ``on`` for
+    ``hold_s`` seconds at speed above ``v_gate`` (m/s); left as soon as one exceeds ``off``, the
+    course rate becomes unknown, or the speed drops below the gate.
+    """
+    fast = yaw_rate if yaw_rate_fast is None else yaw_rate_fast
+    return _straight_loop(
+        np.asarray(t, float), np.asarray(yaw_rate, float), np.asarray(fast, float),
+        np.asarray(course_rate, float), np.asarray(speed, float), on, off, hold_s, v_gate,
+    )  # fmt: skip
+
+
+@numba.njit(cache=True)
+def _kkf_loop(
+    t: NDArray, wz: NDArray, wz_mean: NDArray, wz_fast: NDArray, gyro_var: NDArray,
+    course: NDArray,
+    course_var: NDArray, course_rate: NDArray, speed: NDArray, zero_rate: NDArray,
+    x0: NDArray, P0: NDArray, q_bias: float, on: float, off: float, hold_s: float,
+    v_gate: float, sigma_beta_straight: float, bias_known_var: float,
+) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray]:  # fmt: skip
+    """KKF with state [psi, b_gyro, s_gyro] (s = scale factor; P0[2,2] = 0 freezes it at 0).
+
+    psi' = (w_z - b) / (1 + s) ~ w_z - b - s w_z   (gyro = (1 + s) r + b)
+    """
+    n = t.size
+    x = x0.copy()
+    P = P0.copy()
+    xs = np.empty((n, 3))
+    pd = np.empty((n, 3))
+    straight = np.zeros(n, dtype=np.bool_)
+    innov = np.full(n, np.nan)
+    S = np.full(n, np.nan)
+    F = np.eye(3)
+    Q = np.zeros((3, 3))
+    Gu = np.zeros(3)
+    h_psi = np.array([1.0, 0.0, 0.0])
+    h_b = np.array([0.0, 1.0, 0.0])
+    w = 0.0
+    st = False
+    on_time = 0.0
+    for k in range(n):
+        if np.isfinite(wz[k]):
+            w_new = wz[k]
+        else:
+            w_new = w
+        if k > 0:
+            dt = t[k] - t[k - 1]
+            F[0, 1] = -dt
+            F[0, 2] = -dt * w
+            Q[0, 0] = gyro_var[k] * dt * dt
+            Q[1, 1] = q_bias * dt
+            if zero_rate[k - 1]:
+                # standing still: heading does not change whatever the gyro reads
+                F[0, 1] = 0.0
+                F[0, 2] = 0.0
+                Gu[0] = 0.0
+                Q[0, 0] = 0.0
+            else:
+                Gu[0] = dt * w
+            predict_nb(x, P, F, Q, Gu)
+        w = w_new
+        if zero_rate[k] and np.isfinite(wz[k]):
+            # gyro at standstill reads its bias
+            update_scalar_nb(x, P, wz[k] - x[1], h_b, gyro_var[k])
+        dt_k = t[k] - t[k - 1] if k > 0 else 0.0
+        yaw_dev = wz_mean[k] - x[1] - x[2] * wz_mean[k]
+        yaw_dev_fast = wz_fast[k] - x[1] - x[2] * wz_fast[k]
+        if P[1, 1] > bias_known_var:
+            # bias not learned yet: a raw gyro (phones carry several deg/s of bias) would never
+            # look straight.  Steady straightness is then judged by the GNSS course rate alone,
+            # and turn onsets by the bias-free change of the gyro (0.1 s mean minus 1 s mean).
+            yaw_dev = 0.0
+            yaw_dev_fast = wz_fast[k] - wz_mean[k]
+        st, on_time = _straight_step(
+            st, on_time, yaw_dev, yaw_dev_fast, course_rate[k], speed[k], dt_k, on, off,
+            hold_s, v_gate,
+        )  # fmt: skip
+        straight[k] = st
+        if st and np.isfinite(course[k]):
+            nu = _wrap(course[k] - x[0])
+            S[k] = update_scalar_nb(
+                x, P, nu, h_psi, course_var[k] + sigma_beta_straight * sigma_beta_straight
+            )
+            innov[k] = nu
+        for i in range(3):
+            xs[k, i] = x[i]
+            pd[k, i] = P[i, i]
+    return xs, pd, straight, innov, S
+
+
+@dataclass(frozen=True)
+class KkfResult:
+    """KKF output: beta (held, rad), beta_std, yaw, bias, scale factor, their variances,
+    straight flags, rows with a fresh beta (``beta_fresh``), innovations and S."""
+
+    beta: FloatArray
+    beta_std: FloatArray
+    x: FloatArray
+    var: FloatArray
+    straight: NDArray[np.bool_]
+    beta_fresh: NDArray[np.bool_]
+    innov: FloatArray
+    S: FloatArray
+    beta_std_filter: FloatArray  # eq 6 from the filter's own P (no model-error terms)
+    gyro_sigma_100hz: float  # rad/s, the gyro noise the filter ran with, and its source
+    gyro_sigma_source: str
+
+
+def run_kkf(
+    drive: Drive,
+    vehicle: Vehicle,
+    estimate_scale: bool = False,
+    scale: float = 0.0,
+    settings: KkfSettings | None = None,
+) -> KkfResult:
+    """Run the KKF; ``estimate_scale`` adds the gyro scale-factor state; ``scale`` is a known
+    scale factor removed from the gyro first (w_z / (1 + scale))."""
+    st = settings if settings is not None else KkfSettings()
+    t = drive.t
+    speed = vehicle_speed(drive)
+    cm = gnss.course_at_cg(drive, vehicle, speed, st.v_gate_m_s)
+    wz = drive["wz"] / (1.0 + scale)
+    wz_mean = _moving_mean(t, wz, STRAIGHT_WINDOW_S)
+    wz_fast = _moving_mean(t, wz, STRAIGHT_FAST_S)
+    rows = np.flatnonzero(np.isfinite(cm.course))
+    gnss_dt = float(np.median(np.diff(t[rows]))) if rows.size > 1 else 0.1
+    crate = _course_rate(t, cm.course, max(STRAIGHT_WINDOW_S, 2.0 * gnss_dt))
+    zero_rate = np.abs(speed) < STANDSTILL_SPEED
+    x0 = np.array([initial_heading(t, wz, cm.course), 0.0, 0.0])
+    P0 = np.diag([SIGMA_PSI0**2, SIGMA_BIAS0**2, SIGMA_SCALE0**2 if estimate_scale else 0.0])
+    # the yaw-rate lever-arm term of the course (rx r / V) is removed with the raw gyro
+    course = np.where(np.isfinite(cm.course), cm.course - cm.hr * np.nan_to_num(wz), np.nan)
+    g_sigma, g_source = kkf_gyro_sigma(drive, st)
+    xs, pd, straight, innov, S = _kkf_loop(
+        t, wz, wz_mean, wz_fast, sample_variance(t, g_sigma), course, cm.sigma**2, crate, speed,
+        zero_rate, x0, P0, st.gyro_bias_psd_rad2_s3, st.straight_on_rad_s, st.straight_off_rad_s,
+        st.straight_hold_s, st.v_gate_m_s, SIGMA_BETA_STRAIGHT, BIAS_KNOWN_VAR,
+    )  # fmt: skip
+    fresh = np.isfinite(course)
+    beta_f = np.where(fresh, wrap_angle(np.nan_to_num(course) - xs[:, 0]), np.nan)
+    var_f = pd[:, 0] + np.nan_to_num(cm.sigma) ** 2
+    # heading turned since the last course update on a straight (where psi was measured)
+    upd = np.isfinite(innov)
+    last = np.where(upd, np.arange(t.size), 0)
+    np.maximum.accumulate(last, out=last)  # row of the last update (0 before the first)
+    dt_rows = np.diff(t)
+    turned = np.concatenate(([0.0], np.cumsum(np.nan_to_num(wz[:-1]) * dt_rows)))
+    var_f = var_f + (st.gyro_scale_rel_sigma * (turned - turned[last])) ** 2
+    # road bank: the car crabs by ~ k_slip g sin(bank) on a banked straight (assumed beta = 0
+    # there, so psi takes it), and its body-z gyro under-reads the heading rate by
+    # 1/cos(bank) - 1 in turns on the bank; the bank from the accelerometer when present
+    cue = gravity_lateral_sin(drive, speed, wz - xs[:, 1])
+    sin_bank = np.full(t.size, st.road_bank_sigma) if cue is None else cue
+    k_slip, _ = typical.slip_gain_k(vehicle)
+    bank_at_update = np.where(upd.any(), sin_bank[last], st.road_bank_sigma)
+    tilt = 1.0 / np.sqrt(1.0 - np.minimum(sin_bank, 0.9) ** 2) - 1.0
+    tilt_turn = np.concatenate(([0.0], np.cumsum(np.abs(np.nan_to_num(wz[:-1])) * tilt[:-1]
+                                                 * dt_rows)))  # fmt: skip
+    var_f = var_f + (k_slip * GRAVITY_M_S2 * bank_at_update) ** 2 + (tilt_turn - tilt_turn[last]) ** 2
+    std_f = np.where(fresh, np.sqrt(var_f), np.nan)
+    own_f = np.where(fresh, np.sqrt(pd[:, 0] + np.nan_to_num(cm.sigma) ** 2), np.nan)
+    beta_h, age = hold(beta_f, t, fill=0.0)
+    std_h, _ = hold(std_f, t, fill=KKF_BETA_PRIOR)
+    own_h, _ = hold(own_f, t, fill=KKF_BETA_PRIOR)
+    ok = (age <= max(KKF_MAX_COURSE_AGE_S, 1.5 * gnss_dt)) & (np.abs(speed) > st.v_gate_m_s)
+    beta = np.where(ok, beta_h, 0.0)
+    beta_std = np.where(ok, std_h, KKF_BETA_PRIOR)
+    beta_std_filter = np.where(ok, own_h, KKF_BETA_PRIOR)
+    return KkfResult(beta, beta_std, xs, pd, straight, fresh, innov, S, beta_std_filter,
+                     g_sigma, g_source)  # fmt: skip
+
+
+@register(
+    "kkf",
+    columns=("wz", SPEED, GNSS_COLUMNS),
+    summary="kinematic Kalman filter [psi, b_gyro]: beta = GNSS course - integrated gyro",
+    paper="seed 001 eqs 4, 6",
+    settings=KkfSettings,
+)
+def kkf(drive: Drive, vehicle: Vehicle, settings: KkfSettings | None = None) -> Estimate:
+    """Kinematic Kalman filter of seed 001; see the module docstring."""
+    st = settings if settings is not None else KkfSettings()
+    res = run_kkf(drive, vehicle, settings=st)
+    t = drive.t
+    wz, _ = hold(drive["wz"], t)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        nis = np.where(res.S > 0, res.innov**2 / res.S, np.nan)
+    inflation = np.ones(t.size)
+    health = np.zeros(t.size)
+    health_params: dict[str, object] = {"criterion": "off"}
+    if st.consistency_window_s > 0:
+        cons = binned_nis_consistency(t, nis, 1, st.consistency_window_s)
+        inflation, health, health_params = cons.inflation, cons.health, cons.summary(t)
+    g_sigma, g_source = res.gyro_sigma_100hz, res.gyro_sigma_source
+    series = {
+        "beta": res.beta,
+        "beta_std": res.beta_std * np.sqrt(inflation),
+        "r": wz - res.x[:, 1],  # bias-corrected gyro (the KKF's yaw-rate input)
+        "yaw": wrap_angle(res.x[:, 0]),
+        "gyro_bias": res.x[:, 1],
+        "yaw_std": np.sqrt(np.maximum(res.var[:, 0], 0.0) * inflation),
+        "gyro_bias_std": np.sqrt(np.maximum(res.var[:, 1], 0.0)),
+        "health": health,
+    }
+    params = {
+        "straight_fraction": float(np.mean(res.straight)),
+        "straight_on_rad_s": st.straight_on_rad_s,
+        "straight_off_rad_s": st.straight_off_rad_s,
+        "straight_hold_s": st.straight_hold_s,
+        "v_gate_mps": st.v_gate_m_s,
+        "gyro_bias_rad_s": float(res.x[-1, 1]),
+        "gyro_bias_rad_s_sigma": float(np.sqrt(max(res.var[-1, 1], 0.0))),
+        "noise": {
+            "gyro_sigma_100hz_rad_s": g_sigma,
+            "gyro_sigma_source": g_source,
+            "course_sigma": "gnss_vel_std / V (floor 0.1 deg), GNSS layer",
+        },
+        "residuals": {"course": channel_diagnostics(res.innov, res.S)},
+        "health": health_params,
+        "settings": settings_dict(st),
+    }
+    return Estimate("kkf", t, series, params, {"course": res.innov, "course_nis": nis})

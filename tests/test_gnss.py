@@ -1,0 +1,104 @@
+"""The GNSS measurement layer: course noise model, gates, defaults, Gauss-Markov discretisation."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from sideslip import gnss
+from sideslip.drive import drive_from_columns
+from sideslip.vehicle import load_vehicle
+
+
+def _drive(speed: float = 20.0, course: float = 0.4, vel_std: float | None = 0.2, n: int = 200,
+           seed: int = 0, doppler: bool = True) -> object:  # fmt: skip
+    rng = np.random.default_rng(seed)
+    t = np.arange(n) * 0.1
+    cols: dict[str, np.ndarray] = {"t": t, "v_rl": np.full(n, speed), "v_rr": np.full(n, speed)}
+    if doppler:
+        cols["gnss_ve"] = speed * math.cos(course) + rng.normal(0, vel_std or 0.1, n)
+        cols["gnss_vn"] = speed * math.sin(course) + rng.normal(0, vel_std or 0.1, n)
+        if vel_std is not None:
+            cols["gnss_vel_std"] = np.full(n, vel_std)
+    cols["gnss_e"] = speed * math.cos(course) * t
+    cols["gnss_n"] = speed * math.sin(course) * t
+    return drive_from_columns(cols, {})
+
+
+def test_course_sigma_is_velocity_sigma_over_speed_with_floor() -> None:
+    sig = gnss.course_sigma(np.array([0.2, 0.0]), np.array([20.0, 20.0]))
+    assert sig[0] == pytest.approx(math.hypot(0.01, gnss.COURSE_SIGMA_FLOOR_RAD))
+    assert sig[1] == pytest.approx(gnss.COURSE_SIGMA_FLOOR_RAD)
+
+
+def test_course_samples_scatter_matches_their_sigma() -> None:
+    d = _drive(vel_std=0.3, n=4000, seed=1)
+    cs = gnss.course_samples(d)
+    err = cs.course - 0.4
+    # 4000 samples: the empirical 1-sigma is known to ~1.1 %; 5 % is > 4 sigma
+    assert np.std(err) == pytest.approx(float(np.median(cs.sigma)), rel=0.05)
+
+
+def test_receiver_sigma_default_when_column_absent_or_bad() -> None:
+    d = _drive(vel_std=None)
+    cs = gnss.course_samples(d)
+    expected = math.hypot(gnss.VEL_SIGMA_DEFAULT_M_S / 20.0, gnss.COURSE_SIGMA_FLOOR_RAD)
+    np.testing.assert_allclose(cs.speed, 20.0, atol=0.5)
+    assert cs.sigma == pytest.approx(np.full(cs.sigma.size, expected), rel=0.03)
+
+
+def test_course_gates_by_speed_and_receiver_sigma_and_flips_reversing() -> None:
+    slow = _drive(speed=2.0)
+    assert gnss.course_samples(slow, min_speed=3.0).rows.size == 0
+    poor = _drive(speed=4.0, vel_std=0.5)  # 0.5 / 4 = 7 deg > 5 deg
+    assert gnss.course_samples(poor).rows.size == 0
+    d = _drive(speed=10.0, vel_std=0.05)
+    signed = np.full(len(d), -10.0)  # wheels say reversing: the body points the other way
+    cs = gnss.course_samples(d, signed)
+    assert cs.reversing.all()
+    np.testing.assert_allclose(np.cos(cs.course - (0.4 - math.pi)), 1.0, atol=1e-3)
+    # the vehicle's own speed must confirm the GNSS speed
+    assert gnss.course_samples(d, np.full(len(d), 1.0)).rows.size == 0
+
+
+def test_positions_used_when_no_doppler_with_their_fix_to_fix_sigma() -> None:
+    d = _drive(doppler=False)
+    vel = gnss.velocity_samples(d)
+    assert vel.source == "positions"
+    np.testing.assert_allclose(vel.speed, 20.0, rtol=1e-9)
+    assert vel.sigma[0] == pytest.approx(math.sqrt(2) * 0.45 * gnss.POS_SIGMA_DEFAULT_M / 0.1)
+    assert gnss.doppler_samples(d).rows.size == 0
+
+
+def test_missing_column_reads_as_nan_and_positions_default_sigma() -> None:
+    d = _drive()
+    assert np.isnan(gnss.column(d, "gnss_pos_std")).all()
+    pos = gnss.position_samples(d)
+    assert pos.median_sigma() == gnss.POS_SIGMA_DEFAULT_M
+
+
+def test_gauss_markov_discretisation_keeps_the_stationary_variance() -> None:
+    phi, q = gnss.gauss_markov(0.1, 60.0, 1.2)
+    assert phi == pytest.approx(math.exp(-0.1 / 60.0))
+    # stationary: var = phi^2 var + q  for any step
+    assert phi**2 * 1.44 + q == pytest.approx(1.44, rel=1e-12)
+    # two half steps compose to one full step (exact discretisation, unlike 1 - dt/tau)
+    ph, qh = gnss.gauss_markov(0.05, 60.0, 1.2)
+    assert ph * ph == pytest.approx(phi, rel=1e-12)
+    assert ph * ph * qh + qh == pytest.approx(q, rel=1e-9)
+
+
+def test_course_at_cg_drops_a_multipath_sample() -> None:
+    d = _drive(vel_std=0.05, n=300)
+    cols = {name: np.array(d[name]) for name in d.columns()}
+    cols["wz"] = np.zeros(len(d))
+    ang = math.radians(10.0)
+    ve, vn = cols["gnss_ve"][150], cols["gnss_vn"][150]
+    cols["gnss_ve"][150] = ve * math.cos(ang) - vn * math.sin(ang)
+    cols["gnss_vn"][150] = ve * math.sin(ang) + vn * math.cos(ang)
+    bad = drive_from_columns(cols, {})
+    cm = gnss.course_at_cg(bad, load_vehicle("blazer_suv"), np.full(len(bad), 20.0))
+    assert np.isnan(cm.course[150])
+    assert np.isfinite(cm.course[149]) and np.isfinite(cm.course[151])
