@@ -192,6 +192,9 @@ def write_static(
             continue
         for fmt in formats:
             path = out / f"{name}.{fmt}"
-            _atomic_write(path, lambda tmp, f=fig, x=fmt: f.savefig(tmp, format=x, dpi=DPI))
+            def save(tmp: Path, f: Any = fig, x: str = fmt) -> None:
+                f.savefig(tmp, format=x, dpi=DPI)
+
+            _atomic_write(path, save)
             written.append(path)
     return written
