@@ -1,0 +1,195 @@
+"""How each method's cost grows with the drive's length: 10 min, 1 h, 4 h and 24 h at 100 Hz.
+
+Every method runs on the benchmark drive (``sideslip.bench``: the ``endurance`` scenario,
+simulated up to 1 h, repeated end to end beyond) of each length, in a fresh child process per
+(method, length) so the peak memory is that method's alone: ``method MB`` is the high-water
+mark of the child's resident set while the method runs minus the resident set just before
+(interpreter, drive, compiled code), read from ``/proc/self/status``.  A 24 h run is skipped
+where the 4 h run's memory, scaled linearly, would pass ``--budget-gb`` (the machine is shared).
+
+Writes ``benchmarks/results/scaling.json`` (after every run, so a stopped run keeps what it
+measured), ``scaling.md`` (table, growth exponents, methods over issue #17's bounds) and
+``scaling.png`` (log-log: memory and time against hours).
+
+    nice .venv/bin/python benchmarks/scaling.py [--hours 0.1667 1 4 24] [--method M ...]
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime as dt
+import json
+import math
+import os
+import platform
+import time
+from pathlib import Path
+from typing import Any
+
+from sideslip.bench import bench_drive, measure_in_subprocess
+from sideslip.methods.registry import all_methods
+
+RESULTS = Path(__file__).parent / "results"
+HOURS = (1.0 / 6.0, 1.0, 4.0, 24.0)
+MB_PER_HOUR_BOUND = 250.0  # issue #17: peak memory on the 1 h bench drive
+NONLINEAR_EXPONENT = 1.15  # memory or time growing faster than hours**1.15 is "nonlinear"
+
+
+def _label(hours: float) -> str:
+    return f"{hours * 60:.0f} min" if hours < 1.0 else f"{hours:g} h"
+
+
+def _exponent(runs: dict[float, dict[str, Any]], key: str) -> float:
+    """Log-log slope of ``key`` against hours between the 1 h run and the longest run."""
+    done = sorted(h for h, r in runs.items() if key in r and h >= 1.0 and r[key] > 0)
+    if len(done) < 2:
+        return math.nan
+    a, b = done[0], done[-1]
+    return math.log(runs[b][key] / runs[a][key]) / math.log(b / a)
+
+
+def _markdown(result: dict[str, Any]) -> str:
+    hours = result["hours"]
+    lines = [
+        "# Cost against drive length",
+        "",
+        f"Measured {result['date']} on {result['machine']} by `benchmarks/scaling.py` "
+        f"({result['elapsed_s'] / 60:.0f} min).  Drive: `endurance` at 100 Hz "
+        "(the 1 h simulation repeated end to end past 1 h).  Each cell: the method's own peak "
+        "memory (MB, peak resident set of a child process while the method runs minus the "
+        "process before it with the drive loaded) / run time (s).  `x_mem`, `x_time`: "
+        "log-log growth exponent from 1 h to the longest run (1 = linear).",
+        "",
+        "| method | " + " | ".join(_label(h) for h in hours) + " | B/row 1 h | x_mem | x_time | notes |",
+        "|---|" + "---:|" * len(hours) + "---:|---:|---:|---|",
+    ]
+    flagged: list[str] = []
+    for name, runs_raw in result["methods"].items():
+        runs = {float(h): r for h, r in runs_raw.items()}
+        cells = []
+        notes: list[str] = []
+        for h in hours:
+            r = runs.get(h)
+            if r is None:
+                cells.append("-")
+            elif "skipped" in r or "error" in r:
+                cells.append("n/a")
+                notes.append(f"{_label(h)}: {r.get('skipped') or r.get('error')}")
+            else:
+                cells.append(f"{r['method_mb']:,.0f} / {r['seconds']:.1f}")
+                if r.get("nonfinite"):
+                    notes.append(f"{_label(h)}: non-finite {r['nonfinite']}")
+        one = runs.get(1.0, {})
+        per_row = f"{one['bytes_per_row']:,.0f}" if "bytes_per_row" in one else "-"
+        x_mem = _exponent(runs, "method_mb")
+        x_time = _exponent(runs, "seconds")
+        if one.get("method_mb", 0.0) > MB_PER_HOUR_BOUND:
+            notes.append(f"over {MB_PER_HOUR_BOUND:.0f} MB per 1 h")
+        if x_mem > NONLINEAR_EXPONENT:
+            notes.append("memory nonlinear")
+        if x_time > NONLINEAR_EXPONENT:
+            notes.append("time nonlinear")
+        if notes:
+            flagged.append(name)
+        lines.append(
+            f"| {name} | " + " | ".join(cells) + f" | {per_row} | "
+            f"{x_mem:.2f} | {x_time:.2f} | {'; '.join(notes)} |".replace("nan", "-")
+        )
+    lines += [
+        "",
+        f"Methods over a bound or growing faster than linear: {', '.join(flagged) or 'none'}.",
+        "",
+        "![cost against drive length](scaling.png)",
+    ]
+    return "\n".join(lines) + "\n"
+
+
+def _plot(result: dict[str, Any], path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, (ax_mem, ax_time) = plt.subplots(1, 2, figsize=(9.0, 4.0), dpi=100)
+    for name, runs_raw in result["methods"].items():
+        runs = sorted((float(h), r) for h, r in runs_raw.items() if "method_mb" in r)
+        if len(runs) < 2:
+            continue
+        hs = [h for h, _ in runs]
+        # floors keep the log axes finite for the cheapest methods (below 0.1 MB, 0.1 ms)
+        ax_mem.plot(hs, [max(r["method_mb"], 0.1) for _, r in runs], marker="o", ms=3, lw=1, label=name)
+        ax_time.plot(hs, [max(r["seconds"], 1e-4) for _, r in runs], marker="o", ms=3, lw=1, label=name)
+    for ax, ylabel in ((ax_mem, "method peak memory, MB"), (ax_time, "run time, s")):
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_xlabel("drive length, h (100 Hz)")
+        ax.set_ylabel(ylabel)
+        ax.grid(True, which="both", lw=0.3)
+    ax_mem.axhline(MB_PER_HOUR_BOUND, color="k", lw=0.6, ls="--")
+    ax_mem.axhline(4000.0, color="r", lw=0.6, ls="--")
+    ax_time.legend(fontsize=6, ncol=2, loc="upper left")
+    fig.suptitle("sideslip: cost against drive length (dashed: 250 MB, 4 GB)", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+
+
+def _write(result: dict[str, Any], out: Path) -> None:
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "scaling.json").write_text(json.dumps(result, indent=1))
+    (out / "scaling.md").write_text(_markdown(result))
+    _plot(result, out / "scaling.png")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--hours", type=float, nargs="+", default=list(HOURS))
+    parser.add_argument("--method", action="append", default=None)
+    parser.add_argument("--budget-gb", type=float, default=6.0, help="largest projected child RSS")
+    parser.add_argument("--out", type=Path, default=RESULTS)
+    parser.add_argument("--nice", type=int, default=10)
+    args = parser.parse_args()
+    start = time.perf_counter()
+    bench_drive(1.0)  # simulate and cache the 1 h drive once, before the children need it
+    names = args.method or list(all_methods())
+    hours = sorted(args.hours)
+    result: dict[str, Any] = {
+        "date": dt.datetime.now(dt.UTC).isoformat(timespec="seconds"),
+        "machine": f"{platform.machine()} ({os.cpu_count()} CPUs), Python {platform.python_version()}",
+        "hours": hours,
+        "budget_gb": args.budget_gb,
+        "methods": {n: {} for n in names},
+        "elapsed_s": 0.0,
+    }
+    for h in hours:
+        for name in names:
+            runs = result["methods"][name]
+            done = [float(k) for k, r in runs.items() if "peak_rss_mb" in r]
+            if runs and not done:
+                continue  # skipped or failed on a shorter drive
+            if done:
+                last = max(done)
+                projected = runs[last]["rss_before_mb"] * h / last + runs[last]["method_mb"] * h / last
+                if projected > args.budget_gb * 1024.0:
+                    runs[h] = {"skipped": f"not run: projected {projected / 1024:.1f} GB"}
+                    print(f"{_label(h):>7} {name:24s} skipped (projected {projected / 1024:.1f} GB)")
+                    continue
+            r = measure_in_subprocess(name, h, nice=args.nice, timeout_s=3600.0)
+            runs[h] = r
+            if "method_mb" in r:
+                print(
+                    f"{_label(h):>7} {name:24s} {r['method_mb']:8.0f} MB {r['seconds']:8.2f} s "
+                    f"{r['samples_per_s']:12,.0f}/s  nonfinite {r['nonfinite'] or 0}",
+                    flush=True,
+                )
+            else:
+                print(f"{_label(h):>7} {name:24s} {r}", flush=True)
+            result["elapsed_s"] = time.perf_counter() - start
+            _write(result, args.out)
+    result["elapsed_s"] = time.perf_counter() - start
+    _write(result, args.out)
+    print(f"wrote {args.out / 'scaling.md'}")
+
+
+if __name__ == "__main__":
+    main()
