@@ -90,6 +90,7 @@ def bench_drive(
 
     if not 0.0 < hours <= MAX_TILED_HOURS:
         raise InputError("--hours", f"{hours:g}: expected more than 0 and at most {MAX_TILED_HOURS:g} h")
+    timings: dict[str, float]
     if hours > MAX_HOURS:
         base, timings = bench_drive(1.0, console, cache)
         start = time.perf_counter()
@@ -100,7 +101,7 @@ def bench_drive(
     folder = cache if cache is not None else default_cache()
     folder.mkdir(parents=True, exist_ok=True)
     path = folder / f"{BENCH_SCENARIO}_{hours:g}h.parquet"
-    timings: dict[str, float] = {}
+    timings = {}
     if not path.exists():
         if console:
             console.print(f"simulating a {hours:g} h drive (cached in {path}) ...")
