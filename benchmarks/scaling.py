@@ -148,6 +148,8 @@ def main() -> None:
     parser.add_argument("--budget-gb", type=float, default=6.0, help="largest projected child RSS")
     parser.add_argument("--out", type=Path, default=RESULTS)
     parser.add_argument("--nice", type=int, default=10)
+    parser.add_argument("--budget-s", type=float, default=900.0, help="longest projected run time")
+    parser.add_argument("--reuse", action="store_true", help="keep the runs already in scaling.json")
     args = parser.parse_args()
     start = time.perf_counter()
     bench_drive(1.0)  # simulate and cache the 1 h drive once, before the children need it
@@ -161,9 +163,18 @@ def main() -> None:
         "methods": {n: {} for n in names},
         "elapsed_s": 0.0,
     }
+    old = args.out / "scaling.json"
+    if args.reuse and old.exists():
+        for name, runs_old in json.loads(old.read_text())["methods"].items():
+            if name in result["methods"]:
+                result["methods"][name] = {
+                    float(h): r for h, r in runs_old.items() if "peak_rss_mb" in r and float(h) in hours
+                }
     for h in hours:
         for name in names:
             runs = result["methods"][name]
+            if h in runs:
+                continue
             done = [float(k) for k, r in runs.items() if "peak_rss_mb" in r]
             if runs and not done:
                 continue  # skipped or failed on a shorter drive
@@ -173,6 +184,13 @@ def main() -> None:
                 if projected > args.budget_gb * 1024.0:
                     runs[h] = {"skipped": f"not run: projected {projected / 1024:.1f} GB"}
                     print(f"{_label(h):>7} {name:24s} skipped (projected {projected / 1024:.1f} GB)")
+                    continue
+                x_time = max(_exponent(runs, "seconds"), 1.0) if len(done) > 1 else 1.0
+                x_time = x_time if math.isfinite(x_time) else 1.0
+                secs = runs[last]["seconds"] * (h / last) ** x_time
+                if secs > args.budget_s:
+                    runs[h] = {"skipped": f"not run: projected {secs / 60:.0f} min"}
+                    print(f"{_label(h):>7} {name:24s} skipped (projected {secs:.0f} s)")
                     continue
             r = measure_in_subprocess(name, h, nice=args.nice, timeout_s=3600.0)
             runs[h] = r
