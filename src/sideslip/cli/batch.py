@@ -86,7 +86,7 @@ def batch_cmd(
         TextColumn("[progress.description]{task.description}"), BarColumn(), MofNCompleteColumn(),
         TimeElapsedColumn(), console=err_console,
     ) as progress:  # fmt: skip
-        task = progress.add_task("drives", total=len(dict.fromkeys(drives)))
+        task = progress.add_task("drives", total=len({normalise(d) for d in drives}))
 
         def tick(res: Any) -> None:
             if res.error:
@@ -107,10 +107,11 @@ def batch_cmd(
     out = normalise(out_dir)
     console.print(
         f"{len(results) - len(failed)} of {len(results)} drives done ({resumed} resumed), {rows:,} rows "
-        f"in {elapsed:.1f} s ({rows / max(elapsed, 1e-9):,.0f} rows/s on {engine}); "
-        f"summary: {join(out, 'summary.csv')}, aggregate: {join(out, 'aggregate.parquet')}",
+        f"in {elapsed:.1f} s ({rows / max(elapsed, 1e-9):,.0f} rows/s on {engine})",
         markup=False, highlight=False, soft_wrap=True,
     )  # fmt: skip
+    for label, name in (("summary", "summary.csv"), ("aggregate", "aggregate.parquet")):
+        console.print(f"{label}: {join(out, name)}", markup=False, highlight=False, soft_wrap=True)
     for line in failed:
         say(f"error: {line}")
     if failed:
