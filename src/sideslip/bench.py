@@ -258,6 +258,7 @@ def run_bench(
 ) -> dict[str, Any]:
     """Time every (or the named) method; print a table; write ``out_dir``/bench.* if given."""
     console = console or Console()
+    load_at_start = os.getloadavg()
     if out_dir is not None:
         _check_out_dir(out_dir)
     drive, timings = bench_drive(hours, console, cache)
@@ -309,6 +310,7 @@ def run_bench(
             "processor": platform.processor() or platform.machine(),
             "cpus": os.cpu_count(),
             "python": platform.python_version(),
+            "load_average": [round(x, 2) for x in load_at_start],
         },
         "drive": {"scenario": BENCH_SCENARIO, "hours": hours, **timings},
         "methods": rows,
@@ -376,7 +378,10 @@ def _markdown(result: dict[str, Any]) -> str:
     lines = [
         "# sideslip bench results",
         "",
-        f"Measured {result['date']} on {m['processor']} ({m['cpus']} CPUs), Python {m['python']}.",
+        f"Measured {result['date']} on {m['processor']} ({m['cpus']} CPUs), Python {m['python']}"
+        + (f"; load average {m['load_average'][0]:.1f} at the start (a shared machine: "
+           "samples/s scale with the CPU left)" if m.get("load_average") else "")
+        + ".",
         f"Drive: scenario `{d['scenario']}`, {d['hours']:g} h, {int(d['rows']):,} rows, "
         f"{int(d['columns'])} columns; Parquet load {d['load_parquet_s']:.2f} s"
         + (f"; simulation {d['simulate_s']:.1f} s" if "simulate_s" in d else "")
