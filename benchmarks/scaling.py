@@ -145,9 +145,9 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--hours", type=float, nargs="+", default=list(HOURS))
     parser.add_argument("--method", action="append", default=None)
-    parser.add_argument("--budget-gb", type=float, default=6.0, help="largest projected child RSS")
+    parser.add_argument("--budget-gb", type=float, default=9.0, help="largest projected child RSS")
     parser.add_argument("--out", type=Path, default=RESULTS)
-    parser.add_argument("--nice", type=int, default=10)
+    parser.add_argument("--nice", type=int, default=0, help="extra niceness of each child")
     parser.add_argument("--budget-s", type=float, default=900.0, help="longest projected run time")
     parser.add_argument("--reuse", action="store_true", help="keep the runs already in scaling.json")
     args = parser.parse_args()
@@ -180,7 +180,16 @@ def main() -> None:
                 continue  # skipped or failed on a shorter drive
             if done:
                 last = max(done)
-                projected = runs[last]["rss_before_mb"] * h / last + runs[last]["method_mb"] * h / last
+                # the process before the method (interpreter + drive) grows by the drive's size:
+                # extrapolated from the two longest runs; the method's own peak scaled linearly
+                before = runs[last]["rss_before_mb"]
+                if len(done) > 1:
+                    prev = sorted(done)[-2]
+                    slope = (before - runs[prev]["rss_before_mb"]) / (last - prev)
+                    before += max(slope, 0.0) * (h - last)
+                else:
+                    before *= h / last
+                projected = before + runs[last]["method_mb"] * h / last
                 if projected > args.budget_gb * 1024.0:
                     runs[h] = {"skipped": f"not run: projected {projected / 1024:.1f} GB"}
                     print(f"{_label(h):>7} {name:24s} skipped (projected {projected / 1024:.1f} GB)")

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import json
 import os
+import uuid
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from typing import Any
@@ -27,8 +28,9 @@ from sideslip.errors import InputError
 def _dask_results(client: Any, specs: list[JobSpec]) -> Iterator[JobResult]:
     from dask.distributed import as_completed as dask_completed
 
+    batch = uuid.uuid4().hex[:12]  # keys unique per batch: a cluster never hands back another's result
     futures = [
-        client.submit(run_job, s, pure=False, key=f"sideslip-{i}-{s.key}") for i, s in enumerate(specs)
+        client.submit(run_job, s, pure=False, key=f"sideslip-{batch}-{i}") for i, s in enumerate(specs)
     ]
     for fut in dask_completed(futures):
         yield fut.result()
