@@ -242,10 +242,16 @@ def _peers() -> dict[str, list[Any]]:
 
 
 def _timed(func: Any, *args: Any) -> tuple[float, Any]:
+    wall, _, result = _timed_cpu(func, *args)
+    return wall, result
+
+
+def _timed_cpu(func: Any, *args: Any) -> tuple[float, float, Any]:
+    """Wall-clock and CPU seconds (this process, all threads) of ``func(*args)``."""
     gc.collect()
-    start = time.perf_counter()
+    start, cpu = time.perf_counter(), time.process_time()
     result = func(*args)
-    return time.perf_counter() - start, result
+    return time.perf_counter() - start, time.process_time() - cpu, result
 
 
 def run_bench(
@@ -276,11 +282,13 @@ def run_bench(
             rows.append({"method": name, "skipped": reason})
             continue
         run_method(method, warm, vehicle)
-        elapsed, _ = _timed(run_method, method, drive, vehicle)
+        elapsed, cpu, _ = _timed_cpu(run_method, method, drive, vehicle)
         row: dict[str, Any] = {
             "method": name,
             "seconds": elapsed,
             "samples_per_s": n / elapsed,
+            "cpu_seconds": cpu,
+            "samples_per_cpu_s": n / max(cpu, 1e-9),
         }
         if memory:
             mem = measure_in_subprocess(name, hours, cache)
@@ -387,21 +395,24 @@ def _markdown(result: dict[str, Any]) -> str:
         + (f"; simulation {d['simulate_s']:.1f} s" if "simulate_s" in d else "")
         + ".",
         "",
+        "samples/CPU-s: rows per second of CPU time the method used (all its threads), which",
+        "a shared machine's load disturbs less than the wall-clock samples/s.",
         "Peak MB: the method's own peak resident memory (high-water mark of the process while",
         "it runs minus the process before it, with the drive loaded), measured in a child process",
         "per method; B/row: that peak per drive row.  Issue #17's bound: 250 MB per 1 h drive.",
         "",
-        "| method | samples/s | seconds | peak MB | B/row | peer library |",
-        "|---|---:|---:|---:|---:|---|",
+        "| method | samples/s | samples/CPU-s | seconds | peak MB | B/row | peer library |",
+        "|---|---:|---:|---:|---:|---:|---|",
     ]
     for row in result["methods"]:
         if "skipped" in row:
-            lines.append(f"| {row['method']} | - | - | - | - | skipped: {row['skipped']} |")
+            lines.append(f"| {row['method']} | - | - | - | - | - | skipped: {row['skipped']} |")
         else:
             peak = f"{row['peak_mb']:.0f}" if "peak_mb" in row else "-"
             per_row = f"{row['bytes_per_row']:,.0f}" if "bytes_per_row" in row else "-"
+            cpu = f"{row['samples_per_cpu_s']:,.0f}" if "samples_per_cpu_s" in row else "-"
             lines.append(
-                f"| {row['method']} | {row['samples_per_s']:,.0f} | {row['seconds']:.2f} | "
+                f"| {row['method']} | {row['samples_per_s']:,.0f} | {cpu} | {row['seconds']:.2f} | "
                 f"{peak} | {per_row} | {_peer_text(row)} |"
             )
     return "\n".join(lines) + "\n"
