@@ -179,9 +179,10 @@ def measure_method(name: str, hours: float, cache: Path | None = None) -> dict[s
     _release_free_memory()
     rss_before = _status_kb("VmRSS")
     exact = _reset_peak()
-    start = time.perf_counter()
+    start, cpu_start = time.perf_counter(), time.process_time()
     est = run_method(method, drive, vehicle)
     seconds = time.perf_counter() - start
+    cpu_seconds = time.process_time() - cpu_start
     peak = _status_kb("VmHWM") if exact else resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
     nonfinite = {
         k: int(np.size(v) - np.count_nonzero(np.isfinite(v)))
@@ -195,6 +196,8 @@ def measure_method(name: str, hours: float, cache: Path | None = None) -> dict[s
         "rows": n,
         "seconds": seconds,
         "samples_per_s": n / seconds,
+        "cpu_seconds": cpu_seconds,
+        "samples_per_cpu_s": n / max(cpu_seconds, 1e-9),
         "rss_before_mb": rss_before / 1024.0,
         "peak_rss_mb": peak / 1024.0,
         "method_mb": (peak - rss_before) / 1024.0,
