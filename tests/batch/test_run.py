@@ -172,3 +172,11 @@ def test_a_missing_url_is_one_failed_drive_naming_it(tmp_path):
     res = run_batch([str(good), missing], "seed003_sedan", tmp_path / "o", ["obs_kinematic"], workers=1)
     assert res[0].status == "run" and res[1].status == "failed"
     assert res[1].error == f"{missing}: cannot read: no such file"
+
+
+def test_an_unknown_url_scheme_for_the_output_is_one_line(tmp_path):
+    good, _ = _drives(tmp_path)
+    res = run_cli("batch", good, "--vehicle", "seed003_sedan", "--out-dir", "nosuchscheme://bucket/out")
+    assert res.returncode == 2
+    assert res.stderr.startswith("error: nosuchscheme://bucket/out: cannot open this URL: ")
+    assert "Traceback" not in res.stderr

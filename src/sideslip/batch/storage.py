@@ -40,9 +40,17 @@ def join(base: str, *parts: str) -> str:
 
 
 def _fs(path: str) -> tuple[Any, str]:
-    import fsspec
+    from sideslip.errors import InputError
 
-    fs, inner = fsspec.core.url_to_fs(path)
+    try:
+        import fsspec
+    except ImportError:
+        raise InputError(path, "a URL needs fsspec: pip install fsspec (and its driver)") from None
+    try:
+        fs, inner = fsspec.core.url_to_fs(path)
+    except (ImportError, ValueError) as exc:
+        first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        raise InputError(path, f"cannot open this URL: {first}") from None
     return fs, inner
 
 
