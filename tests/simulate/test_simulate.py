@@ -168,3 +168,27 @@ def test_drive_survives_a_parquet_round_trip(tmp_path) -> None:
     assert back.meta["vehicle"] == "seed003_sedan"
     assert math.isclose(back.meta["truth_sensor"]["steer_offset"],
                         drive.meta["truth_sensor"]["steer_offset"])
+
+
+def test_scenario_runner_and_commonroad_do_not_import_each_other() -> None:
+    import ast
+    from pathlib import Path
+
+    import sideslip.simulate as pkg
+
+    def imports(module: str) -> set[str]:
+        tree = ast.parse((Path(pkg.__file__).parent / f"{module}.py").read_text())
+        out: set[str] = set()
+        for node in ast.walk(tree):
+            if isinstance(node, ast.ImportFrom) and node.module:
+                out.add(node.module)
+                out.update(f"{node.module}.{a.name}" for a in node.names)
+            elif isinstance(node, ast.Import):
+                out.update(a.name for a in node.names)
+        return out
+
+    # run -> commonroad (the cr_ scenarios) is the one direction left; commonroad -> run is gone
+    assert "sideslip.simulate.commonroad" in imports("run")
+    assert "sideslip.simulate.run" not in imports("commonroad")
+    assert "sideslip.simulate.commonroad" not in imports("assemble")
+    assert "sideslip.simulate.run" not in imports("assemble")

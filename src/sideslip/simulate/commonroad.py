@@ -51,6 +51,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
+from sideslip.simulate.assemble import drive_from_truth
 from sideslip.simulate.truth import Truth
 
 if TYPE_CHECKING:
@@ -390,7 +391,6 @@ def commonroad_drive(
     The sensor lever arms and ``meta["vehicle"]`` come from the preset
     ``commonroad_<params>`` (see :func:`vehicle_toml`).
     """
-    from sideslip.simulate.run import drive_from_truth
     from sideslip.vehicle import load_vehicle
 
     vehicle_name = f"commonroad_{params}"

@@ -47,23 +47,46 @@ output every ``dt``; the loop is compiled with numba.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
 
 import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
 from sideslip.simulate.driver import OpenLoopPlan, PathPlan, Plan, ou_noise
+from sideslip.simulate.model_layout import (
+    N_ROAD,
+    R_B,
+    R_DB,
+    R_DG,
+    R_E,
+    R_G,
+    R_H,
+    R_K,
+    R_MU,
+    R_N,
+    R_V,
+    R_Z,
+    T_NOISE,
+    T_SPEED,
+    T_STEER,
+    Diagnostics,
+    clip,
+    project_on_path,
+    road_at,
+    road_matrix,
+    row_at,
+    table_at,
+)  # fmt: skip
+from sideslip.simulate.model_params import ModelOptions, ModelParams, internal_step, model_params
 from sideslip.simulate.road import Road
 from sideslip.simulate.truth import Truth
 from sideslip.simulate.tyre import (
-    TyreShape,
     combined_lateral,
     friction_peak,
     lateral_force,
     longitudinal_slip,
 )
-from sideslip.vehicle import G, Vehicle
+from sideslip.vehicle import Vehicle
 
 FloatArray = NDArray[np.float64]
 
@@ -73,50 +96,6 @@ REQUIRED = (
 )  # fmt: skip
 
 
-@dataclass(frozen=True)
-class ModelOptions:
-    """Truth-model settings that a vehicle file does not carry.
-
-    front_roll_share   share of the roll stiffness (and damping) on the front axle
-    drive_front        share of the drive force on the front axle (0: RWD, 1: FWD)
-    brake_front        share of the brake force on the front axle
-    power_per_mass     engine power per vehicle mass, W/kg
-    brake_max          deceleration limit of the brakes, m/s^2 (tyres limit further)
-    cda                drag area C_d A, m^2;  crr  rolling-resistance coefficient
-    v_min              slip-angle regularisation speed, m/s
-    tau_load           time constant of the load-transfer specific forces, s
-    pitch_gain         suspension pitch per longitudinal specific force, rad/(m/s^2)
-    tau_pitch          its time constant, s
-    tyre               Magic Formula shape factors
-    """
-
-    front_roll_share: float = 0.55
-    drive_front: float = 1.0
-    brake_front: float = 0.65
-    power_per_mass: float = 100.0
-    brake_max: float = 9.0
-    cda: float = 0.7
-    crr: float = 0.012
-    v_min: float = 0.5
-    tau_load: float = 0.05
-    pitch_gain: float = math.radians(1.5) / G
-    tau_pitch: float = 0.12
-    tyre: TyreShape = field(default_factory=TyreShape)
-
-
-# ---- parameter vector indices --------------------------------------------------------------
-(P_M, P_IZ, P_LF, P_LR, P_TF, P_TR, P_HCG, P_HRC, P_K, P_D, P_IR, P_CAF, P_CAR, P_KUS,
- P_FRS, P_DF, P_BF, P_POWER, P_BMAX, P_CDA, P_CRR, P_VMIN, P_TAUL, P_PG, P_TAUP,
- P_CY, P_EY, P_PLOAD, P_PMU, P_CX, P_CK,
- P_TPREV, P_KE, P_KD, P_KI, P_SKP, P_SKI, P_STAU, P_SPREV, P_SRATE, P_STAUS, P_SLIM,
- P_STOPDEC, P_AACC, P_ADEC, P_MODE, P_LEN, P_KR) = range(48)  # fmt: skip
-N_PARAMS = 48
-
-# road rows
-R_E, R_N, R_H, R_K, R_B, R_G, R_MU, R_Z, R_DB, R_DG, R_V = range(11)
-N_ROAD = 11
-# time-table rows (on the output grid)
-T_STEER, T_SPEED, T_NOISE = range(3)
 # states
 (X_E, X_N, X_YAW, X_VX, X_VY, X_R, X_PHI, X_PHID, X_DELTA, X_FX, X_FY, X_PITCH, X_IE, X_IV,
  X_VCMD) = range(15)  # fmt: skip
@@ -133,64 +112,6 @@ N_OUT = 33
 
 
 @njit(cache=True)
-def _road_at(R: FloatArray, s: float, ds: float, out: FloatArray) -> None:
-    m = R.shape[1]
-    x = s / ds
-    if x <= 0.0:
-        i, f = 0, 0.0
-    elif x >= m - 1:
-        i, f = m - 2, 1.0
-    else:
-        i = int(x)
-        f = x - i
-    for k in range(R.shape[0]):
-        out[k] = R[k, i] + f * (R[k, i + 1] - R[k, i])
-
-
-@njit(cache=True)
-def _row_at(R: FloatArray, row: int, s: float, ds: float) -> float:
-    m = R.shape[1]
-    x = s / ds
-    if x <= 0.0:
-        return R[row, 0]
-    if x >= m - 1:
-        return R[row, m - 1]
-    i = int(x)
-    f = x - i
-    return R[row, i] + f * (R[row, i + 1] - R[row, i])
-
-
-@njit(cache=True)
-def _table_at(T: FloatArray, row: int, t: float, dtab: float) -> float:
-    """A time table's row at time t (uniform step dtab): the same interpolation as _row_at."""
-    return _row_at(T, row, t, dtab)
-
-
-@njit(cache=True)
-def _project(R: FloatArray, ds: float, s_ref: float, e: float, n: float) -> float:
-    """One Newton step of the projection of (e, n) on the path, from s_ref."""
-    h = _row_at(R, R_H, s_ref, ds)
-    de = e - _row_at(R, R_E, s_ref, ds)
-    dn = n - _row_at(R, R_N, s_ref, ds)
-    s = s_ref + de * math.cos(h) + dn * math.sin(h)
-    length = (R.shape[1] - 1) * ds
-    if s < 0.0:
-        s = 0.0
-    elif s > length:
-        s = length
-    return s
-
-
-@njit(cache=True)
-def _clip(v: float, lo: float, hi: float) -> float:
-    if v < lo:
-        return lo
-    if v > hi:
-        return hi
-    return v
-
-
-@njit(cache=True)
 def _deriv(
     x: FloatArray,
     t: float,
@@ -198,7 +119,7 @@ def _deriv(
     held: bool,
     dwelling: bool,
     stop_s: float,
-    P: FloatArray,
+    P: ModelParams,
     R: FloatArray,
     ds: float,
     T: FloatArray,
@@ -208,9 +129,9 @@ def _deriv(
     rd: FloatArray,
 ) -> None:
     g = 9.80665
-    m = P[P_M]
-    lf = P[P_LF]
-    lr = P[P_LR]
+    m = P.mass
+    lf = P.lf
+    lr = P.lr
     wb = lf + lr
     e_pos = x[X_E]
     n_pos = x[X_N]
@@ -226,8 +147,8 @@ def _deriv(
     vcmd = x[X_VCMD]
 
     # ---- road under the vehicle ---------------------------------------------------------
-    s_loc = _project(R, ds, s_ref, e_pos, n_pos)
-    _road_at(R, s_loc, ds, rd)
+    s_loc = project_on_path(R, ds, s_ref, e_pos, n_pos)
+    road_at(R, s_loc, ds, rd)
     th = rd[R_H]
     kap = rd[R_K]
     bank = rd[R_B]
@@ -251,17 +172,18 @@ def _deriv(
     sgr = math.sin(grade)
 
     # ---- driver: steering -----------------------------------------------------------------
-    mode = int(P[P_MODE])
-    noise = _table_at(T, T_NOISE, t, dtab)
+    mode = int(P.open_loop)
+    noise = table_at(T, T_NOISE, t, dtab)
     throttle = 1.0
     if mode == 0:
         vfw = vx if vx > 0.0 else 0.0
-        kap_p = _row_at(R, R_K, s_loc + vfw * P[P_TPREV], ds)
+        kap_p = row_at(R, R_K, s_loc + vfw * P.preview_s, ds)
         vfb = abs(vx) if abs(vx) > 3.0 else 3.0
-        kap_des = kap_p - (P[P_KE] * ey + P[P_KD] * eydot + P[P_KI] * x[X_IE]) / (vfb * vfb)
-        dcmd = math.atan(wb * kap_des) + P[P_KUS] * (vx * vx * kap_des + g * sb)
+        feedback = P.lateral_gain_offset * ey + P.lateral_gain_rate * eydot + P.lateral_ki * x[X_IE]
+        kap_des = kap_p - feedback / (vfb * vfb)
+        dcmd = math.atan(wb * kap_des) + P.understeer_gradient * (vx * vx * kap_des + g * sb)
         r_ref = vx * kap_des
-        dcmd += P[P_KR] * (r_ref - r)
+        dcmd += P.yaw_rate_gain * (r_ref - r)
         # oversteer: the yaw rate exceeds the path's by more than 0.03 rad/s (or turns the
         # wrong way): the driver lifts the throttle (a stability-control rule)
         if r * r_ref >= 0.0:
@@ -273,35 +195,35 @@ def _deriv(
             if throttle < 0.0:
                 throttle = 0.0
     else:
-        dcmd = _table_at(T, T_STEER, t, dtab)
-    dcmd = _clip(dcmd + noise, -P[P_SLIM], P[P_SLIM])
-    ddot = _clip((dcmd - delta) / P[P_STAUS], -P[P_SRATE], P[P_SRATE])
+        dcmd = table_at(T, T_STEER, t, dtab)
+    dcmd = clip(dcmd + noise, -P.steer_limit, P.steer_limit)
+    ddot = clip((dcmd - delta) / P.steer_tau, -P.steer_rate_max, P.steer_rate_max)
 
     # ---- driver: speed ----------------------------------------------------------------------
     if mode == 0:
-        look = vx * P[P_SPREV]
+        look = vx * P.speed_preview_s
         if look < 3.0:
             look = 3.0
-        vt = _row_at(R, R_V, s_loc + look, ds)
+        vt = row_at(R, R_V, s_loc + look, ds)
         if dwelling:
             vt = 0.0
         elif stop_s < 1e17:
             d = stop_s - s_loc - 0.5
-            cap = math.sqrt(2.0 * P[P_STOPDEC] * d) if d > 0.0 else 0.0
+            cap = math.sqrt(2.0 * P.stop_decel * d) if d > 0.0 else 0.0
             if cap < vt:
                 vt = cap
     else:
-        vt = _table_at(T, T_SPEED, t, dtab)
-    vcd = _clip((vt - vcmd) / P[P_STAU], -P[P_ADEC], P[P_AACC])
+        vt = table_at(T, T_SPEED, t, dtab)
+    vcd = clip((vt - vcmd) / P.speed_tau, -P.a_dec, P.a_acc)
 
     ay_est = (fyf - g * sb) / cb
     n_tot = m * (g * cb * cgr - ay_est * sb)
     if n_tot < 0.1 * m * g:
         n_tot = 0.1 * m * g
     sgn_v = vx / math.sqrt(vx * vx + 0.01)
-    f_rr = P[P_CRR] * n_tot * sgn_v
-    f_aero = 0.5 * 1.2 * P[P_CDA] * vx * abs(vx)
-    f_dem = m * (vcd + P[P_SKP] * (vcmd - vx) + P[P_SKI] * x[X_IV]) + f_rr + f_aero + m * g * sgr
+    f_rr = P.crr * n_tot * sgn_v
+    f_aero = 0.5 * 1.2 * P.cda * vx * abs(vx)
+    f_dem = m * (vcd + P.speed_kp * (vcmd - vx) + P.speed_ki * x[X_IV]) + f_rr + f_aero + m * g * sgr
     direction = 1.0
     if vcmd < -0.01 or (vcmd <= 0.01 and vx < 0.0):
         direction = -1.0
@@ -309,10 +231,10 @@ def _deriv(
     f_brake = 0.0
     if f_dem * direction >= 0.0:
         vpow = abs(vx) if abs(vx) > 2.0 else 2.0
-        fmax = P[P_POWER] / vpow
-        f_drive = _clip(f_dem, -fmax, fmax) * throttle
+        fmax = P.power_w / vpow
+        f_drive = clip(f_dem, -fmax, fmax) * throttle
     else:
-        f_brake = min(abs(f_dem), P[P_BMAX] * m)
+        f_brake = min(abs(f_dem), P.brake_max * m)
     if abs(vt) < 1e-6 and abs(vcmd) < 0.1:
         # at rest or stopping: the driver holds the brake pedal
         f_drive = 0.0
@@ -320,14 +242,14 @@ def _deriv(
             f_brake = 0.2 * m * g
 
     # ---- normal loads -------------------------------------------------------------------------
-    hcg = P[P_HCG]
-    hrc = P[P_HRC]
+    hcg = P.cg_height
+    hrc = P.roll_axis_height
     h_roll = hcg - hrc
     nf = n_tot * lr / wb - m * fxf * hcg / wb
     nr = n_tot * lf / wb + m * fxf * hcg / wb
-    roll_mom = P[P_K] * phi + P[P_D] * phid
-    dff = (P[P_FRS] * roll_mom + m * lr / wb * hrc * fyf) / P[P_TF]
-    dfr = ((1.0 - P[P_FRS]) * roll_mom + m * lf / wb * hrc * fyf) / P[P_TR]
+    roll_mom = P.roll_stiffness * phi + P.roll_damping * phid
+    dff = (P.front_roll_share * roll_mom + m * lr / wb * hrc * fyf) / P.track_front
+    dfr = ((1.0 - P.front_roll_share) * roll_mom + m * lf / wb * hrc * fyf) / P.track_rear
     fz0f = 0.5 * m * g * lr / wb
     fz0r = 0.5 * m * g * lf / wb
 
@@ -341,22 +263,22 @@ def _deriv(
         left = i % 2 == 0
         if front:
             xi = lf
-            yi = 0.5 * P[P_TF] if left else -0.5 * P[P_TF]
+            yi = 0.5 * P.track_front if left else -0.5 * P.track_front
             fz = 0.5 * nf - dff if left else 0.5 * nf + dff
             fz0 = fz0f
-            ca0 = P[P_CAF]
+            ca0 = P.cornering_stiffness_tyre_front
             dl = delta
-            share_d = 0.5 * P[P_DF]
-            share_b = 0.5 * P[P_BF]
+            share_d = 0.5 * P.drive_front
+            share_b = 0.5 * P.brake_front
         else:
             xi = -lr
-            yi = 0.5 * P[P_TR] if left else -0.5 * P[P_TR]
+            yi = 0.5 * P.track_rear if left else -0.5 * P.track_rear
             fz = 0.5 * nr - dfr if left else 0.5 * nr + dfr
             fz0 = fz0r
-            ca0 = P[P_CAR]
+            ca0 = P.cornering_stiffness_tyre_rear
             dl = 0.0
-            share_d = 0.5 * (1.0 - P[P_DF])
-            share_b = 0.5 * (1.0 - P[P_BF])
+            share_d = 0.5 * (1.0 - P.drive_front)
+            share_b = 0.5 * (1.0 - P.brake_front)
         if fz < 0.0:
             fz = 0.0
         vxi = vx - r * yi
@@ -365,17 +287,17 @@ def _deriv(
         sd = math.sin(dl)
         vlong = vxi * cd + vyi * sd
         vlat = -vxi * sd + vyi * cd
-        alpha = -math.atan(vlat / math.sqrt(vlong * vlong + P[P_VMIN] * P[P_VMIN]))
-        peak = friction_peak(fz, mu, fz0, P[P_PMU])
-        fy0 = lateral_force(alpha, fz, peak, ca0, fz0, P[P_CY], P[P_EY], P[P_PLOAD])
+        alpha = -math.atan(vlat / math.sqrt(vlong * vlong + P.v_min * P.v_min))
+        peak = friction_peak(fz, mu, fz0, P.tyre_mu_load)
+        fy0 = lateral_force(alpha, fz, peak, ca0, fz0, P.tyre_c_y, P.tyre_e_y, P.tyre_load_exponent)
         # traction control / ABS with lateral priority: the drive force takes only what the
         # friction circle leaves beside the lateral force; braking keeps at least 30 %.
         cap = 0.95 * peak
         lat = abs(fy0) if abs(fy0) < cap else cap
         room = math.sqrt(cap * cap - lat * lat)
-        fx_drive = _clip(f_drive * share_d, -room, room)
+        fx_drive = clip(f_drive * share_d, -room, room)
         room_b = room if room > 0.3 * cap else 0.3 * cap
-        fx_brake = _clip(f_brake * share_b, 0.0, room_b)
+        fx_brake = clip(f_brake * share_b, 0.0, room_b)
         fxi = fx_drive - fx_brake * vlong / math.sqrt(vlong * vlong + 0.01)
         fyi = combined_lateral(fy0, fxi, peak)
         fxb = fxi * cd - fyi * sd
@@ -383,7 +305,7 @@ def _deriv(
         sum_fx += fxb
         sum_fy += fyb
         mz += xi * fyb - yi * fxb
-        kappa = longitudinal_slip(fxi, fz, peak, P[P_CX], P[P_CK])
+        kappa = longitudinal_slip(fxi, fz, peak, P.tyre_c_x, P.tyre_slip_stiffness)
         aux[A_WS0 + i] = (vlong + kappa * abs(vlong)) / cgr
         if front:
             alf += 0.5 * alpha
@@ -398,7 +320,7 @@ def _deriv(
         fy = g * sb
     ax_h = (fx - g * sgr) / cgr
     ay_h = (fy - g * sb) / cb
-    rdot = mz / P[P_IZ]
+    rdot = mz / P.yaw_inertia
     if held:
         ax_h = 0.0
         ay_h = 0.0
@@ -416,13 +338,12 @@ def _deriv(
     xdot[X_R] = rdot
     g_n = g * cb * cgr
     xdot[X_PHI] = phid
-    xdot[X_PHID] = (m * h_roll * fy - P[P_D] * phid - P[P_K] * phi + m * g_n * h_roll * math.sin(phi)) / P[
-        P_IR
-    ]
+    roll_moment = m * h_roll * fy - P.roll_damping * phid - P.roll_stiffness * phi
+    xdot[X_PHID] = (roll_moment + m * g_n * h_roll * math.sin(phi)) / P.roll_inertia
     xdot[X_DELTA] = ddot
-    xdot[X_FX] = (fx - fxf) / P[P_TAUL]
-    xdot[X_FY] = (fy - fyf) / P[P_TAUL]
-    xdot[X_PITCH] = (-P[P_PG] * fxf - x[X_PITCH]) / P[P_TAUP]
+    xdot[X_FX] = (fx - fxf) / P.tau_load
+    xdot[X_FY] = (fy - fyf) / P.tau_load
+    xdot[X_PITCH] = (-P.pitch_gain * fxf - x[X_PITCH]) / P.tau_pitch
     xdot[X_IE] = ey if (mode == 0 and vx > 2.0) else 0.0
     xdot[X_IV] = 0.0 if held else vcmd - vx
     xdot[X_VCMD] = vcd
@@ -448,7 +369,7 @@ def _deriv(
 def _run(
     x0: FloatArray,
     s0: float,
-    P: FloatArray,
+    P: ModelParams,
     R: FloatArray,
     ds: float,
     T: FloatArray,
@@ -474,7 +395,7 @@ def _run(
     k_stop = 0
     n_stops = stop_s.shape[0]
     dwell_end = 0.0
-    mode = int(P[P_MODE])
+    mode = int(P.open_loop)
     for j in range(n_out):
         t = j * dtab
         pending = stop_s[k_stop] if k_stop < n_stops else 1e18
@@ -493,7 +414,7 @@ def _run(
         row[O_T] = t
         row[O_E] = x[X_E]
         row[O_N] = x[X_N]
-        row[O_U] = aux[A_Z] + P[P_HCG]
+        row[O_U] = aux[A_Z] + P.cg_height
         row[O_YAW] = x[X_YAW]
         row[O_PITCH] = pitch
         row[O_ROLL] = roll
@@ -538,9 +459,9 @@ def _run(
             _deriv(xt, tt + h, s_ref, held, dwelling, pending, P, R, ds, T, dtab, k4, aux, rd)
             for q in range(N_STATES):
                 x[q] += h / 6.0 * (k1[q] + 2.0 * k2[q] + 2.0 * k3[q] + k4[q])
-            s_ref = _project(R, ds, s_ref, x[X_E], x[X_N])
-            x[X_IE] = _clip(x[X_IE], -3.0, 3.0)
-            x[X_IV] = _clip(x[X_IV], -3.0, 3.0)
+            s_ref = project_on_path(R, ds, s_ref, x[X_E], x[X_N])
+            x[X_IE] = clip(x[X_IE], -3.0, 3.0)
+            x[X_IV] = clip(x[X_IV], -3.0, 3.0)
             t_new = tt + h
             hold_request = False
             if mode == 0:
@@ -557,7 +478,7 @@ def _run(
                         k_stop += 1
                 hold_request = dwelling
             else:
-                vt = _table_at(T, T_SPEED, t_new, dtab)
+                vt = table_at(T, T_SPEED, t_new, dtab)
                 hold_request = abs(vt) < 1e-9 and abs(x[X_VCMD]) < 0.05
             if hold_request and abs(x[X_VX]) < 0.05 and abs(x[X_VY]) < 0.05:
                 held = True
@@ -568,111 +489,6 @@ def _run(
             else:
                 held = False
     return out
-
-
-def _param_vector(vehicle: Vehicle, plan: Plan, options: ModelOptions, length: float) -> FloatArray:
-    gains = plan.gains
-    p = np.zeros(N_PARAMS)
-    p[P_M] = vehicle.mass
-    p[P_IZ] = vehicle.yaw_inertia
-    p[P_LF] = vehicle.lf
-    p[P_LR] = vehicle.lr
-    p[P_TF] = vehicle.track_front
-    p[P_TR] = vehicle.track_rear
-    p[P_HCG] = vehicle.cg_height
-    p[P_HRC] = vehicle.roll_axis_height
-    p[P_K] = vehicle.roll_stiffness
-    p[P_D] = vehicle.roll_damping
-    p[P_IR] = vehicle.roll_inertia
-    p[P_CAF] = 0.5 * vehicle.cf
-    p[P_CAR] = 0.5 * vehicle.cr
-    kus = vehicle.understeer_gradient
-    p[P_KUS] = kus if math.isfinite(kus) else vehicle.understeer_gradient_tyres
-    p[P_FRS] = options.front_roll_share
-    p[P_DF] = options.drive_front
-    p[P_BF] = options.brake_front
-    p[P_POWER] = options.power_per_mass * vehicle.mass
-    p[P_BMAX] = options.brake_max
-    p[P_CDA] = options.cda
-    p[P_CRR] = options.crr
-    p[P_VMIN] = options.v_min
-    p[P_TAUL] = options.tau_load
-    p[P_PG] = options.pitch_gain
-    p[P_TAUP] = options.tau_pitch
-    tyre = options.tyre
-    p[P_CY] = tyre.c_y
-    p[P_EY] = tyre.e_y
-    p[P_PLOAD] = tyre.load_exponent
-    p[P_PMU] = tyre.mu_load
-    p[P_CX] = tyre.c_x
-    p[P_CK] = tyre.slip_stiffness
-    p[P_TPREV] = gains.preview_s
-    p[P_KE] = gains.lateral_omega**2
-    p[P_KD] = 2.0 * gains.lateral_zeta * gains.lateral_omega
-    p[P_KI] = gains.lateral_ki
-    p[P_KR] = gains.yaw_rate_gain
-    p[P_SKP] = gains.speed_kp
-    p[P_SKI] = gains.speed_ki
-    p[P_STAU] = gains.speed_tau
-    p[P_SPREV] = gains.speed_preview_s
-    p[P_SRATE] = math.radians(gains.handwheel_rate_deg) / vehicle.steering_ratio
-    p[P_STAUS] = gains.steer_tau
-    p[P_SLIM] = gains.steer_limit
-    p[P_STOPDEC] = gains.stop_decel
-    p[P_AACC] = plan.a_acc
-    p[P_ADEC] = plan.a_dec
-    p[P_MODE] = 0.0 if isinstance(plan, PathPlan) else 1.0
-    p[P_LEN] = length
-    return p
-
-
-def _road_matrix(road: Road, plan: Plan) -> FloatArray:
-    R = np.zeros((N_ROAD, road.s.size))
-    R[R_E] = road.e
-    R[R_N] = road.n
-    R[R_H] = road.heading
-    R[R_K] = road.curvature
-    R[R_B] = road.bank
-    R[R_G] = road.grade
-    R[R_MU] = road.mu
-    R[R_Z] = road.elevation
-    R[R_DB] = np.gradient(road.bank, road.ds)
-    R[R_DG] = np.gradient(road.grade, road.ds)
-    R[R_V] = plan.v_profile if isinstance(plan, PathPlan) else 0.0
-    return R
-
-
-def internal_step(vehicle: Vehicle, options: ModelOptions, dt: float) -> int:
-    """Number of RK4 sub-steps per output step: step <= 2.5 ms and <= 1.5 / lambda_max.
-
-    lambda_max bounds the fastest eigenvalue, that of the tyre lateral / yaw damping at the
-    regularisation speed v_min: (cf + cr) / (m v_min) and (cf lf^2 + cr lr^2) / (I_z v_min).
-    """
-    v = options.v_min
-    lam_lat = (vehicle.cf + vehicle.cr) / (vehicle.mass * v)
-    lam_yaw = (vehicle.cf * vehicle.lf**2 + vehicle.cr * vehicle.lr**2) / (vehicle.yaw_inertia * v)
-    lam = max(lam_lat, lam_yaw, 1.0 / options.tau_load)
-    h = min(0.0025, 1.5 / lam)
-    return max(1, math.ceil(dt / h - 1e-9))
-
-
-@dataclass(frozen=True)
-class Diagnostics:
-    """Internals of a run that the truth does not carry (for tests and tuning).
-
-    s path arc length (m), lateral_offset from the path (m, left +), speed_command and
-    speed_target (m/s), held (1 when held at rest), fy_road (lateral specific force in the
-    road plane, m/s^2), alpha_front / alpha_rear (mean slip angle per axle, rad)
-    """
-
-    s: FloatArray
-    lateral_offset: FloatArray
-    speed_command: FloatArray
-    speed_target: FloatArray
-    held: FloatArray
-    fy_road: FloatArray
-    alpha_front: FloatArray
-    alpha_rear: FloatArray
 
 
 def simulate_truth_full(
@@ -698,8 +514,8 @@ def simulate_truth_full(
         table[T_STEER] = np.interp(t_tab, plan.t, plan.steer)
         table[T_SPEED] = np.interp(t_tab, plan.t, plan.speed)
     table[T_NOISE] = ou_noise(rng, n_out + 1, dt, math.radians(plan.steer_noise_deg), 1.0)
-    R = _road_matrix(road, plan)
-    P = _param_vector(vehicle, plan, options, road.length)
+    R = road_matrix(road, plan)
+    P = model_params(vehicle, plan, options, road.length)
     if isinstance(plan, PathPlan):
         stops = [(s, d) for s, d in plan.stops]
         stops.append((road.length - 1.0, math.inf))
@@ -770,3 +586,9 @@ def simulate_truth(
 ) -> Truth:
     """Truth of ``duration_s`` of driving ``plan`` on ``road`` (see :func:`simulate_truth_full`)."""
     return simulate_truth_full(vehicle, road, plan, duration_s, dt, rng, options)[0]
+
+
+__all__ = [
+    "Diagnostics", "ModelOptions", "ModelParams", "internal_step", "model_params", "simulate_truth",
+    "simulate_truth_full",
+]  # fmt: skip
