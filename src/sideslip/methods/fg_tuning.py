@@ -10,7 +10,7 @@ independent evidence and so always prefers a small a_y sigma that fits every sam
 Criterion: the yaw rate the model predicts ahead.  For each candidate pair (a_y-factor sigma,
 beta dynamic-factor sigma) the Kalman filter of the graph runs over the drive; every
 ``stride`` rows its state is propagated ``horizon_s`` ahead with the model and the steering
-alone (no measurement), and compared with the gyro sample there.  The pair with the least mean
+alone (no measurement), and compared with the gyro sample there.  The pair with the least error
 squared prediction error is chosen.  A beta that is wrong (because the a_y factor pulled it to
 a wrong tyre relation, or because the dynamic factors let it drift) predicts the yaw
 acceleration wrongly through the yaw-moment equation (A21 beta, paper eq 6) and shows in the
@@ -62,7 +62,7 @@ AUTO_MODEL_BETA = (1e-3, 4e-3)  # rad per 0.01 s step: the physics and the paper
 HORIZON_S = 0.3
 STRIDE = 5
 CRITERION = (
-    f"least mean squared error of the gyro yaw rate predicted {HORIZON_S:g} s ahead by the "
+    f"least variance of the error of the gyro yaw rate predicted {HORIZON_S:g} s ahead by the "
     "graph's Kalman filter and model (no measurement during the horizon), over a grid of "
     "a_y-factor and beta-model sigmas"
 )
@@ -98,11 +98,11 @@ def gyro_prediction_error(
     horizon: int,
     stride: int,
     score: NDArray[np.bool_],
-) -> tuple[float, int]:
+) -> tuple[float, int, float]:
     """Kalman filter of the chain factors; every ``stride`` rows the updated state is
     propagated ``horizon`` steps with F, g only and its yaw rate (row 0 of the unary factors)
-    compared with the gyro there.  Returns (sum of squared errors, count) over rows where
-    ``score`` (the target row's flag) holds and a gyro sample is present."""
+    compared with the gyro there.  Returns (sum of squared errors, count, sum of errors) over
+    rows where ``score`` (the target row's flag) holds and a gyro sample is present."""
     n = Hu.shape[0]
     M = Hu.shape[1]
     nx = Hu.shape[2]
@@ -112,6 +112,7 @@ def gyro_prediction_error(
     work = np.empty((2 * nx + 2, nx))
     y = np.zeros(nx)
     sse = 0.0
+    se = 0.0
     count = 0
     for k in range(n):
         for m in range(M):
@@ -139,12 +140,13 @@ def gyro_prediction_error(
                 for i in range(nx):
                     d -= Hu[e, 0, i] * y[i]
                 sse += d * d
+                se += d
                 count += 1
         if k < n - 1:
             for i in range(nx):
                 Q[i, i] = 1.0 / wq[k, i]
             predict_ws_nb(x, P, F[k], Q, g[k], work)
-    return sse, count
+    return sse, count, se
 
 
 @numba.njit(cache=True)
@@ -239,10 +241,15 @@ def choose_sigmas(
         wu[:, 1] = wu_unit[:, 1] / sa**2
         for sb in grid_b:
             wq[move, 0] = wq_unit[move, 0] / sb**2
-            sse, count = gyro_prediction_error(F, g, wq, Hu, zu, wu, x0, P0, horizon, STRIDE, score)
-            mse = sse / count if count else math.inf
+            sse, count, se = gyro_prediction_error(
+                F, g, wq, Hu, zu, wu, x0, P0, horizon, STRIDE, score
+            )
+            # the error's variance, not its mean square: a constant gyro bias (the model has
+            # none, so the prediction decays it away over the horizon) shifts every
+            # candidate's error alike and must not decide (raw phone gyros: several deg/s)
+            mse = max(sse / count - (se / count) ** 2, 0.0) if count else math.inf
             candidates.append({"lateral_acceleration": sa, "model_beta": sb,
-                               "gyro_prediction_rms_rad_s": math.sqrt(mse)})
+                               "gyro_prediction_std_rad_s": math.sqrt(mse)})
             if mse < best[0]:
                 best = (mse, sa, sb)
     if math.isfinite(best[0]):
