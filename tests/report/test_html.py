@@ -122,7 +122,7 @@ def test_calibration_table_skipped_methods_parameters_and_foot():
     assert "<meta name='viewport' content='width=device-width, initial-scale=1'>" in page
     assert "Uncertainty calibration" in page and re.search(r"<td class=(good|warn)>(calibrated|over|conservative)", page)
     assert "<th>ekf_wss_sas</th><td class=left>drive lacks &#x27;v_rl&#x27;</td>" in page
-    assert "<th>slip_gain_k_s2pm</th>" in page  # fused's identified slip gain, one row of its table
+    assert "<th>slip_gain_k_s2_m</th>" in page  # fused's identified slip gain, one row of its table
     assert "sideslip 0.1.0 · generated 20" in page and "sideslip report d.parquet e.parquet --out r.html" in page
 
 

@@ -10,8 +10,10 @@ independent evidence and so always prefers a small a_y sigma that fits every sam
 Criterion: the yaw rate the model predicts ahead.  For each candidate pair (a_y-factor sigma,
 beta dynamic-factor sigma) the Kalman filter of the graph runs over the drive; every
 ``stride`` rows its state is propagated ``horizon_s`` ahead with the model and the steering
-alone (no measurement), and compared with the gyro sample there.  The pair with the least error
-squared prediction error is chosen.  A beta that is wrong (because the a_y factor pulled it to
+alone (no measurement), and compared with the gyro sample there.  The pair whose prediction
+error has the least variance is chosen (the variance, not the mean square: a constant gyro bias,
+which the model lacks, shifts every candidate's error alike and would otherwise decide; raw
+phone gyros carry several deg/s of it).  A beta that is wrong (because the a_y factor pulled it to
 a wrong tyre relation, or because the dynamic factors let it drift) predicts the yaw
 acceleration wrongly through the yaw-moment equation (A21 beta, paper eq 6) and shows in the
 gyro a few tenths of a second later, where the gyro is an independent, precise cue; a model
