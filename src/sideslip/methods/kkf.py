@@ -69,6 +69,7 @@ from sideslip.settings import settings_dict
 from sideslip.signals import (
     GRAVITY_M_S2,
     STANDSTILL_SPEED,
+    causal_mean,
     gravity_lateral_sin,
     hold,
     sample_variance,
@@ -176,18 +177,6 @@ def _course_rate(t: FloatArray, course: FloatArray, window_s: float) -> FloatArr
     last_course_age = hold(course, t, fill=np.nan)[1]
     stale = max(0.5 * window_s, 1.5 * float(np.median(np.diff(tc))))
     return np.where((age <= window_s) & (last_course_age <= stale), held, np.nan)
-
-
-def _moving_mean(t: FloatArray, x: FloatArray, window_s: float) -> FloatArray:
-    """Causal moving mean over ``window_s`` of the finite samples (held where none)."""
-    v = np.where(np.isfinite(x), x, 0.0)
-    c = np.isfinite(x).astype(float)
-    cv = np.concatenate(([0.0], np.cumsum(v)))
-    cc = np.concatenate(([0.0], np.cumsum(c)))
-    j = np.searchsorted(t, t - window_s, side="right")
-    i = np.arange(t.size) + 1
-    cnt = cc[i] - cc[j]
-    return np.where(cnt > 0, (cv[i] - cv[j]) / np.maximum(cnt, 1.0), 0.0)
 
 
 @numba.njit(cache=True)
@@ -367,8 +356,8 @@ def run_kkf(
     speed = vehicle_speed(drive)
     cm = gnss.course_at_cg(drive, vehicle, speed, st.v_gate_m_s)
     wz = drive["wz"] / (1.0 + scale)
-    wz_mean = _moving_mean(t, wz, STRAIGHT_WINDOW_S)
-    wz_fast = _moving_mean(t, wz, STRAIGHT_FAST_S)
+    wz_mean = causal_mean(t, wz, STRAIGHT_WINDOW_S)
+    wz_fast = causal_mean(t, wz, STRAIGHT_FAST_S)
     rows = np.flatnonzero(np.isfinite(cm.course))
     gnss_dt = float(np.median(np.diff(t[rows]))) if rows.size > 1 else 0.1
     crate = _course_rate(t, cm.course, max(STRAIGHT_WINDOW_S, 2.0 * gnss_dt))

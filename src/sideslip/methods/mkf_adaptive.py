@@ -23,10 +23,10 @@ from numpy.typing import NDArray
 
 from sideslip.drive import Drive
 from sideslip.estimate import Estimate
-from sideslip.methods.kkf import KkfSettings, _moving_mean, run_kkf
+from sideslip.methods.kkf import KkfSettings, run_kkf
 from sideslip.methods.mkf import GNSS_COLUMNS, MkfSettings, mkf_estimate
 from sideslip.methods.registry import SPEED, register
-from sideslip.signals import hold, vehicle_speed
+from sideslip.signals import causal_mean, hold, vehicle_speed
 from sideslip.vehicle import Vehicle
 
 FloatArray = NDArray[np.float64]
@@ -64,7 +64,7 @@ def identify_cornering_stiffness(
     """
     L = vehicle.wheelbase
     v = np.maximum(np.abs(speed), 1e-3)
-    rdot = np.gradient(_moving_mean(t, yaw_rate, 0.5), t) if t.size > 2 else np.zeros_like(t)
+    rdot = np.gradient(causal_mean(t, yaw_rate, 0.5), t) if t.size > 2 else np.zeros_like(t)
     ay = v * yaw_rate
     sel = (
         use
