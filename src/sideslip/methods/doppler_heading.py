@@ -37,6 +37,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.sparse as sp
 from numpy.typing import NDArray
 
 from sideslip import gnss
@@ -157,16 +158,60 @@ def knot_times(t0: float, t1: float, spacing: float) -> FloatArray:
     return np.linspace(t0, t1, count)
 
 
+def _hat_parts(t: FloatArray, knots: FloatArray) -> tuple[NDArray[np.intp], FloatArray, FloatArray]:
+    """Interval j of each t (knots[j] <= t < knots[j+1], clipped) and its h = t - knots[j], Delta_j."""
+    j = np.clip(np.searchsorted(knots, t, side="right") - 1, 0, knots.size - 2)
+    h = np.clip(t - knots[j], 0.0, None)
+    return j, h, knots[j + 1] - knots[j]
+
+
+def _two_per_row(j: NDArray[np.intp], a: FloatArray, b: FloatArray, m: int) -> sp.csr_matrix:
+    """(n, m) sparse matrix with ``a`` in column j and ``b`` in column j + 1 of each row."""
+    n = j.size
+    rows = np.repeat(np.arange(n), 2)
+    cols = np.stack([j, j + 1], axis=1).ravel()
+    vals = np.stack([a, b], axis=1).ravel()
+    return sp.csr_matrix((vals, (rows, cols)), shape=(n, m))
+
+
+def hat_values_sparse(t: FloatArray, knots: FloatArray) -> sp.csr_matrix:
+    """(n, M) sparse values of the piecewise-linear hat functions on ``knots`` at ``t``."""
+    j, h, dk = _hat_parts(np.clip(t, knots[0], knots[-1]), knots)
+    w = np.clip(h / dk, 0.0, 1.0)
+    return _two_per_row(j, 1.0 - w, w, knots.size)
+
+
 def hat_values(t: FloatArray, knots: FloatArray) -> FloatArray:
     """(n, M) values of the piecewise-linear hat functions on ``knots`` at times ``t``."""
-    eye = np.eye(knots.size)
-    return np.stack([np.interp(t, knots, eye[j]) for j in range(knots.size)], axis=1)
+    return np.asarray(hat_values_sparse(t, knots).toarray(), dtype=float)
+
+
+def knot_cumulative(knots: FloatArray) -> FloatArray:
+    """(M, M) Q with (Q v)_k = int_{knots[0]}^{knots[k]} b dt, b piecewise linear through v."""
+    m = knots.size
+    half = 0.5 * np.diff(knots)
+    step = np.zeros((m - 1, m))
+    step[np.arange(m - 1), np.arange(m - 1)] = half
+    step[np.arange(m - 1), np.arange(1, m)] += half
+    return np.vstack([np.zeros((1, m)), np.cumsum(step, axis=0)])
+
+
+def hat_integral_parts(t: FloatArray, knots: FloatArray) -> tuple[sp.csr_matrix, sp.csr_matrix]:
+    """Sparse (R, D), each (n, M), with hat_integrals(t, knots) = R @ knot_cumulative(knots) + D.
+
+    R picks the knot interval of each t; D holds the partial integral inside it (two
+    entries a row), so the design of the heading fit never needs its dense (n, M) form.
+    """
+    j, h, dk = _hat_parts(t, knots)
+    n, m = t.size, knots.size
+    pick = sp.csr_matrix((np.ones(n), (np.arange(n), j)), shape=(n, m))
+    return pick, _two_per_row(j, h - 0.5 * h * h / dk, 0.5 * h * h / dk, m)
 
 
 def hat_integrals(t: FloatArray, knots: FloatArray) -> FloatArray:
     """(n, M) integrals from knots[0] to t of the hat functions on ``knots`` (exact)."""
-    eye = np.eye(knots.size)
-    return np.stack([_bias_integral_rows(t, knots, eye[j]) for j in range(knots.size)], axis=1)
+    pick, part = hat_integral_parts(t, knots)
+    return np.asarray(pick @ knot_cumulative(knots) + part.toarray(), dtype=float)
 
 
 def _bias_integral_rows(t: FloatArray, knots: FloatArray, values: FloatArray) -> FloatArray:
@@ -229,12 +274,27 @@ def fit_heading(
     y = samples.course[idx] - (course_offset[idx] if course_offset is not None else 0.0)
     sig = samples.sigma[idx]
     i_meas = integ[rows]
-    A_c = np.zeros((rows.size, 2 + M))
-    A_c[:, 0] = 1.0
-    A_c[:, 1] = i_meas
-    A_c[:, 2:] = -hat_integrals(t[rows], knots)
+    # the design [1, i, -hat_integrals] / sigma = Z @ T with Z sparse (a few entries a row)
+    # and T = [[I2, 0], [0, Q], [0, I_M]]: every product below is O(epochs + M^2), never the
+    # dense (epochs, M) matrix (whose Gram matrix made the fit quadratic in the drive's length)
+    pick, part = hat_integral_parts(t[rows], knots)
+    Q = knot_cumulative(knots)
+    inv_sig = sp.diags(1.0 / sig)
+    Z = sp.hstack([sp.csr_matrix(np.column_stack([np.ones(rows.size), i_meas]) / sig[:, None]),
+                   -(inv_sig @ pick), -(inv_sig @ part)]).tocsr()
+    T = np.zeros((2 + 2 * M, 2 + M))
+    T[0, 0] = T[1, 1] = 1.0
+    T[2:2 + M, 2:] = Q
+    T[2 + M:, 2:] = np.eye(M)
+
+    def gram(z: sp.csr_matrix) -> FloatArray:
+        return np.asarray(T.T @ (z.T @ z).toarray() @ T, dtype=float)
+
+    def predict(x: FloatArray) -> FloatArray:
+        kb = x[2:]
+        return np.asarray(x[0] + x[1] * i_meas - (pick @ (Q @ kb) + part @ kb), dtype=float)
     # standstill pseudo-measurements of the offset: 1-s block means of the raw gyro
-    st_rows_A = np.zeros((0, 2 + M))
+    st_hat = sp.csr_matrix((0, M))
     st_y = np.zeros(0)
     st_sig = np.zeros(0)
     if still_rows is not None and wz_raw is not None and still_rows.size > 10:
@@ -246,8 +306,7 @@ def fit_heading(
         means = sums[keep] / counts[keep]
         tb = tsum[keep] / counts[keep]
         noise = float(np.std(wz_raw[still_rows])) if still_rows.size > 1 else 1e-3
-        st_rows_A = np.zeros((means.size, 2 + M))
-        st_rows_A[:, 2:] = hat_values(tb, knots)
+        st_hat = hat_values_sparse(tb, knots)
         st_y = means
         st_sig = np.full(means.size, max(noise, 1e-5)) / np.sqrt(counts[keep]) + 2e-5
     # priors: offset level, random walk between knots, scale correction
@@ -271,20 +330,21 @@ def fit_heading(
     d = np.unwrap(wrap_angle(y - i_meas)) + i_meas if rows.size else y
     resid_std = np.inf
     iterations = 0
-    W = A_c / sig[:, None] if rows.size else np.zeros((0, 2 + M))
-    S = st_rows_A / st_sig[:, None]
-    Pw = P / p_sig[:, None]
-    N_fixed = S.T @ S + Pw.T @ Pw
-    g_fixed = S.T @ (st_y / st_sig) + Pw.T @ (p_y / p_sig)
-    N_all = W.T @ W
+    S = sp.diags(1.0 / st_sig) @ st_hat
+    Pw = sp.csr_matrix(P / p_sig[:, None])
+    N_fixed = np.asarray((Pw.T @ Pw).toarray(), dtype=float)
+    N_fixed[2:, 2:] += (S.T @ S).toarray()
+    g_fixed = np.asarray(Pw.T @ (p_y / p_sig), dtype=float)
+    g_fixed[2:] += S.T @ (st_y / st_sig)
+    N_all = gram(Z)
     for iterations in range(1, max_iter + 1):  # noqa: B007
         out = ~used
-        N = N_fixed + N_all - (W[out].T @ W[out] if out.any() else 0.0)
-        g = g_fixed + W.T @ np.where(used, (d - i_meas) / sig, 0.0)
+        N = N_fixed + N_all - (gram(Z[out]) if out.any() else 0.0)
+        g = g_fixed + T.T @ (Z.T @ np.where(used, (d - i_meas) / sig, 0.0))
         x = _solve_normal(N, g)
         if rows.size == 0:
             break
-        pred = A_c @ x + i_meas
+        pred = predict(x) + i_meas
         res = wrap_angle(y - pred)
         d = pred + res  # re-wrap about the prediction
         kept = res[used]
@@ -303,7 +363,7 @@ def fit_heading(
             cov_ss = float(np.linalg.inv(N)[1, 1])
         except np.linalg.LinAlgError:
             cov_ss = float("inf")
-        z = (wrap_angle(y - (A_c @ x + i_meas)) / sig)[used]
+        z = (wrap_angle(y - (predict(x) + i_meas)) / sig)[used]
         excess = max(float(np.mean(z * z)), 1.0)
         span = max(float(t[rows[-1]] - t[rows[0]]), 1e-6)
         corr = max(float(used.sum()) / span * HEADING_CORR_S, 1.0)
