@@ -52,6 +52,7 @@ IntArray = NDArray[np.intp]
 HEADING_MIN_SPEED = 5.0  # m/s: Doppler course noise sigma_v/V is below ~1 deg above this
 DEFAULT_VEL_STD = 0.1  # m/s: Doppler 1-sigma when the drive gives no gnss_vel_std
 KNOT_SPACING_S = 60.0  # s between gyro-offset knots
+DENSE_MAX_KNOTS = 128  # beyond (drives over ~2 h) the fit is solved sparse, O(knots)
 BIAS_RW = 1.0e-4  # rad/s change of the offset per knot interval, 1-sigma (MEMS drift)
 BIAS_PRIOR = 0.05  # rad/s, 1-sigma prior on the offset level (about 3 deg/s)
 SCALE_PRIOR = 0.02  # 1-sigma prior on the gyro scale correction s
@@ -224,6 +225,57 @@ def _bias_integral_rows(t: FloatArray, knots: FloatArray, values: FloatArray) ->
     return np.asarray(out, dtype=float)
 
 
+def knot_constraints(knots: FloatArray) -> sp.csr_matrix:
+    """(M, 2 + 2M) E with E z = 0 iff z's integrals c equal Q kb (:func:`knot_cumulative`).
+
+    z = [psi0, s, c_0..c_{M-1}, kb_0..kb_{M-1}]: c_0 = 0 and
+    c_k - c_{k-1} - (kb_{k-1} + kb_k) Delta_{k-1} / 2 = 0 (the trapezoid of b), a band.
+    """
+    m = knots.size
+    half = 0.5 * np.diff(knots)
+    k = np.arange(1, m)
+    rows = np.concatenate(([0], k, k, k, k))
+    cols = np.concatenate(([2], 2 + k, 1 + k, 2 + m + k - 1, 2 + m + k))
+    vals = np.concatenate(([1.0], np.ones(m - 1), -np.ones(m - 1), -half, -half))
+    return sp.csr_matrix((vals, (rows, cols)), shape=(m, 2 + 2 * m))
+
+
+@dataclass(frozen=True)
+class _SparseSolution:
+    """Solution of the heading fit's normal equations in z-space, and its factorisation."""
+
+    x: FloatArray
+    lu: object
+    scale: FloatArray
+
+    def var(self, i: int) -> float:
+        """(N^-1)_ii of the x-space normal matrix (i < 2: psi0 or s)."""
+        e = np.zeros(self.scale.size)
+        e[i] = 1.0 / self.scale[i]
+        return float(self.lu.solve(e)[i] / self.scale[i])  # type: ignore[attr-defined]
+
+
+def _solve_sparse(G: sp.spmatrix, E: sp.csr_matrix, rhs: FloatArray) -> _SparseSolution:
+    """min |Z z - v|^2 + fixed terms subject to E z = 0, through the sparse KKT system.
+
+    ``G`` = Z^T Z + fixed terms (z-space), ``rhs`` = Z^T v + fixed terms.  The same solution
+    as the dense x-space normal equations, in O(knots) instead of O(knots^3); the z columns
+    are scaled to unit diagonal as in :func:`_solve_normal`.
+    """
+    from scipy.sparse.linalg import splu
+
+    n_z, n_c = G.shape[0], E.shape[0]
+    d = np.sqrt(np.clip(G.diagonal(), 1e-300, None))
+    scale = np.concatenate((d, np.ones(n_c)))
+    Dinv = sp.diags(1.0 / scale)
+    K = (Dinv @ sp.bmat([[G, E.T], [E, None]]) @ Dinv).tocsc()
+    lu = splu(K)
+    sol = lu.solve(np.concatenate((rhs, np.zeros(n_c))) / scale) / scale
+    m = (n_z - 2) // 2
+    x = np.concatenate((sol[:2], sol[2 + m:n_z]))
+    return _SparseSolution(np.asarray(x, dtype=float), lu, scale)
+
+
 def _solve_normal(N: FloatArray, g: FloatArray) -> FloatArray:
     """Solve the normal equations N x = g (symmetric, positive definite thanks to the priors).
 
@@ -278,21 +330,25 @@ def fit_heading(
     # and T = [[I2, 0], [0, Q], [0, I_M]]: every product below is O(epochs + M^2), never the
     # dense (epochs, M) matrix (whose Gram matrix made the fit quadratic in the drive's length)
     pick, part = hat_integral_parts(t[rows], knots)
-    Q = knot_cumulative(knots)
+    sparse_path = M > DENSE_MAX_KNOTS
+    Q = knot_cumulative(knots) if not sparse_path else np.zeros((0, M))
     inv_sig = sp.diags(1.0 / sig)
     Z = sp.hstack([sp.csr_matrix(np.column_stack([np.ones(rows.size), i_meas]) / sig[:, None]),
                    -(inv_sig @ pick), -(inv_sig @ part)]).tocsr()
-    T = np.zeros((2 + 2 * M, 2 + M))
-    T[0, 0] = T[1, 1] = 1.0
-    T[2:2 + M, 2:] = Q
-    T[2 + M:, 2:] = np.eye(M)
+    T = np.zeros((2 + 2 * M, 2 + M) if not sparse_path else (0, 0))
+    if not sparse_path:
+        T[0, 0] = T[1, 1] = 1.0
+        T[2:2 + M, 2:] = Q
+        T[2 + M:, 2:] = np.eye(M)
 
     def gram(z: sp.csr_matrix) -> FloatArray:
         return np.asarray(T.T @ (z.T @ z).toarray() @ T, dtype=float)
 
     def predict(x: FloatArray) -> FloatArray:
         kb = x[2:]
-        return np.asarray(x[0] + x[1] * i_meas - (pick @ (Q @ kb) + part @ kb), dtype=float)
+        cum = (Q @ kb if not sparse_path else
+               np.concatenate(([0.0], np.cumsum(0.5 * (kb[1:] + kb[:-1]) * np.diff(knots)))))
+        return np.asarray(x[0] + x[1] * i_meas - (pick @ cum + part @ kb), dtype=float)
     # standstill pseudo-measurements of the offset: 1-s block means of the raw gyro
     st_hat = sp.csr_matrix((0, M))
     st_y = np.zeros(0)
@@ -332,16 +388,31 @@ def fit_heading(
     iterations = 0
     S = sp.diags(1.0 / st_sig) @ st_hat
     Pw = sp.csr_matrix(P / p_sig[:, None])
-    N_fixed = np.asarray((Pw.T @ Pw).toarray(), dtype=float)
-    N_fixed[2:, 2:] += (S.T @ S).toarray()
+    N_fixed_sp = (Pw.T @ Pw + sp.block_diag([sp.csr_matrix((2, 2)), S.T @ S])).tocsr()
     g_fixed = np.asarray(Pw.T @ (p_y / p_sig), dtype=float)
     g_fixed[2:] += S.T @ (st_y / st_sig)
-    N_all = gram(Z)
+    if sparse_path:
+        # x = Sel z: psi0, s and the knots' offsets kb out of z = [psi0, s, c, kb]
+        sel = sp.csr_matrix((np.ones(2 + M), (np.arange(2 + M),
+                             np.concatenate(([0, 1], 2 + M + np.arange(M))))), shape=(2 + M, 2 + 2 * M))
+        G_fixed = sel.T @ N_fixed_sp @ sel
+        E = knot_constraints(knots)
+        N_all = np.zeros((0, 0))
+        N = N_all
+    else:
+        N_fixed = np.asarray(N_fixed_sp.toarray(), dtype=float)
+        N_all = gram(Z)
+    solution: _SparseSolution | None = None
     for iterations in range(1, max_iter + 1):  # noqa: B007
-        out = ~used
-        N = N_fixed + N_all - (gram(Z[out]) if out.any() else 0.0)
-        g = g_fixed + T.T @ (Z.T @ np.where(used, (d - i_meas) / sig, 0.0))
-        x = _solve_normal(N, g)
+        v_used = Z.T @ np.where(used, (d - i_meas) / sig, 0.0)
+        if sparse_path:
+            Zu = Z[used] if rows.size else Z
+            solution = _solve_sparse(G_fixed + Zu.T @ Zu, E, sel.T @ g_fixed + v_used)
+            x = solution.x
+        else:
+            out = ~used
+            N = N_fixed + N_all - (gram(Z[out]) if out.any() else 0.0)
+            x = _solve_normal(N, g_fixed + T.T @ v_used)
         if rows.size == 0:
             break
         pred = predict(x) + i_meas
@@ -360,8 +431,8 @@ def fit_heading(
     s_sigma = float("inf")
     if rows.size and used.sum() > 3:
         try:
-            cov_ss = float(np.linalg.inv(N)[1, 1])
-        except np.linalg.LinAlgError:
+            cov_ss = solution.var(1) if solution is not None else float(np.linalg.inv(N)[1, 1])
+        except (np.linalg.LinAlgError, RuntimeError):
             cov_ss = float("inf")
         z = (wrap_angle(y - (predict(x) + i_meas)) / sig)[used]
         excess = max(float(np.mean(z * z)), 1.0)

@@ -204,16 +204,20 @@ class AyBiasScan:
 
 def _course_at(
     row: int, t: FloatArray, samples: CourseSamples, offset: FloatArray, half_s: float,
-    good: NDArray[np.bool_] | None = None,
+    good: NDArray[np.bool_] | None = None, ts: FloatArray | None = None,
 ) -> float | None:
     """Median of the (offset-corrected) course within +-half_s of ``row``, or None.
+
+    ``ts``: the course samples' times ``t[samples.rows]`` when the caller has them (one
+    gather per drive instead of one per curve end, which was quadratic in the drive's length).
 
     The median (of the course unwrapped about its first sample) resists a multipath epoch;
     ``good`` masks samples already flagged as outliers by the heading fit.
     """
     if samples.rows.size == 0:
         return None
-    ts = t[samples.rows]
+    if ts is None:
+        ts = t[samples.rows]
     lo, hi = np.searchsorted(ts, [t[row] - half_s, t[row] + half_s + 1e-9])
     keep = np.arange(lo, hi)
     if good is not None:
@@ -255,6 +259,7 @@ def curve_windows(
     # course samples around each end: +-1.5 s, wider for slow receivers (three epochs at least)
     gnss_dt = float(np.median(np.diff(t[samples.rows]))) if samples.rows.size > 1 else 0.1
     half = max(END_HALF_S, 1.5 * gnss_dt)
+    ts = t[samples.rows]
     for s0_, s1_ in zip(starts, stops, strict=True):
         s0, s1 = int(s0_), int(s1_)
         if (s1 - s0) * dt < MIN_CURVE_S or s0 <= last_stop:
@@ -269,8 +274,8 @@ def curve_windows(
             continue
         a = max(a - round(1.0 / dt), 0)  # a little straight driving at each end
         b = min(b + round(1.0 / dt), n - 1)
-        ca = _course_at(a, t, samples, course_offset, half, good)
-        cb = _course_at(b, t, samples, course_offset, half, good)
+        ca = _course_at(a, t, samples, course_offset, half, good, ts)
+        cb = _course_at(b, t, samples, course_offset, half, good, ts)
         if ca is None or cb is None:
             continue
         turn = integ[b] - integ[a]
