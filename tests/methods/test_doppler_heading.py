@@ -192,3 +192,19 @@ def test_heading_fit_memory_grows_linearly_with_the_drive_length() -> None:
     (epochs x knots) design it replaced grew as length^2 and gave 9.0."""
     ratio = _peak_memory_of_fit(7200.0) / _peak_memory_of_fit(1800.0)
     assert ratio < 5.0, f"2 h / 30 min peak memory of fit_heading = {ratio:.2f} (linear 4)"
+
+
+def test_long_drive_without_gnss_gives_the_integrated_gyro_on_the_sparse_path(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """No course sample leaves the heading's start unobserved: the sparse solve must not fail
+    on the singular system but start at 0, as the dense path's minimum-norm solve does."""
+    import sideslip.methods.doppler_heading as dh
+
+    monkeypatch.setattr(dh, "DENSE_MAX_KNOTS", 0)
+    t = np.arange(0.0, 600.0, DT)
+    empty = CourseSamples(np.zeros(0, dtype=np.intp), np.zeros(0), np.zeros(0), np.zeros(0))
+    fit = fit_heading(t, np.full(t.size, 0.1), empty, np.zeros(0, dtype=bool))
+    # the priors keep the offset at 0 and the scale at 1: yaw = 0.1 rad/s x t exactly
+    assert np.max(np.abs(fit.yaw - 0.1 * (t - t[0]))) < 1e-9
+    assert fit.residual_std == np.inf

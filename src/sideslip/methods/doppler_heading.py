@@ -265,6 +265,14 @@ def _solve_sparse(G: sp.spmatrix, E: sp.csr_matrix, rhs: FloatArray) -> _SparseS
     from scipy.sparse.linalg import splu
 
     n_z, n_c = G.shape[0], E.shape[0]
+    # a variable nothing observes (psi0 without a course sample) is set to 0, as the dense
+    # solve's minimum-norm fallback does
+    # (only psi0 and s: the integrals c have no diagonal of their own at the last knot but are
+    # fixed by E; the knots' offsets always have their priors)
+    unseen = np.zeros(n_z, dtype=bool)
+    unseen[:2] = G.diagonal()[:2] <= 0.0
+    if unseen.any():
+        G = G + sp.diags(unseen.astype(float))
     d = np.sqrt(np.clip(G.diagonal(), 1e-300, None))
     scale = np.concatenate((d, np.ones(n_c)))
     Dinv = sp.diags(1.0 / scale)
