@@ -36,3 +36,35 @@ def test_too_few_blocks_or_a_failed_fit_give_inf_and_honest_std_takes_the_larger
     assert block_jackknife_std(np.arange(6), lambda m: np.nan) == np.inf
     assert honest_std(0.1, 4, np.inf) == pytest.approx(0.1 * t_factor(4))
     assert honest_std(0.1, 1000, 0.5) == 0.5
+
+
+def test_jackknife_from_block_sums_equals_refitting_without_each_block() -> None:
+    """The O(n) form (leave-one-block-out sums) gives the generic jackknife's value, for a
+    slope through the origin and a centred slope (same estimator, only round-off apart)."""
+    from sideslip.methods.doppler_stats import block_jackknife_sums_std, ratio_of_sums
+
+    rng = np.random.default_rng(4)
+    t = np.sort(rng.uniform(0.0, 600.0, 3000))
+    x = rng.normal(1.0, 2.0, t.size)
+    y = 0.3 * x + 0.1 + rng.standard_normal(t.size) * (0.2 + 0.1 * np.sin(t / 30.0))
+    labels = time_blocks(t, 20.0)
+
+    def through_origin(mask: np.ndarray) -> float:
+        return float(np.sum(x[mask] * y[mask]) / np.sum(x[mask] ** 2))
+
+    def centred(mask: np.ndarray) -> float:
+        xm, ym = x[mask], y[mask]
+        return float(np.sum((xm - xm.mean()) * (ym - ym.mean())) / np.sum((xm - xm.mean()) ** 2))
+
+    def centred_sums(loo: np.ndarray) -> np.ndarray:
+        n, sx, sy, sxx, sxy = loo
+        return (sxy - sx * sy / n) / (sxx - sx * sx / n)
+
+    generic = block_jackknife_std(labels, through_origin)
+    fast = block_jackknife_sums_std(labels, np.stack([x * y, x * x]), ratio_of_sums)
+    assert fast == pytest.approx(generic, rel=1e-9)
+    cols = np.stack([np.ones_like(x), x, y, x * x, x * y])
+    assert block_jackknife_sums_std(labels, cols, centred_sums) == pytest.approx(
+        block_jackknife_std(labels, centred), rel=1e-9)
+    # too few blocks: inf, as the generic form
+    assert block_jackknife_sums_std(np.zeros(t.size, dtype=np.intp), cols, centred_sums) == np.inf

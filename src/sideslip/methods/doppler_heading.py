@@ -37,6 +37,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.sparse as sp
 from numpy.typing import NDArray
 
 from sideslip import gnss
@@ -51,6 +52,7 @@ IntArray = NDArray[np.intp]
 HEADING_MIN_SPEED = 5.0  # m/s: Doppler course noise sigma_v/V is below ~1 deg above this
 DEFAULT_VEL_STD = 0.1  # m/s: Doppler 1-sigma when the drive gives no gnss_vel_std
 KNOT_SPACING_S = 60.0  # s between gyro-offset knots
+DENSE_MAX_KNOTS = 128  # beyond (drives over ~2 h) the fit is solved sparse, O(knots)
 BIAS_RW = 1.0e-4  # rad/s change of the offset per knot interval, 1-sigma (MEMS drift)
 BIAS_PRIOR = 0.05  # rad/s, 1-sigma prior on the offset level (about 3 deg/s)
 SCALE_PRIOR = 0.02  # 1-sigma prior on the gyro scale correction s
@@ -157,16 +159,60 @@ def knot_times(t0: float, t1: float, spacing: float) -> FloatArray:
     return np.linspace(t0, t1, count)
 
 
+def _hat_parts(t: FloatArray, knots: FloatArray) -> tuple[NDArray[np.intp], FloatArray, FloatArray]:
+    """Interval j of each t (knots[j] <= t < knots[j+1], clipped) and its h = t - knots[j], Delta_j."""
+    j = np.clip(np.searchsorted(knots, t, side="right") - 1, 0, knots.size - 2)
+    h = np.clip(t - knots[j], 0.0, None)
+    return j, h, knots[j + 1] - knots[j]
+
+
+def _two_per_row(j: NDArray[np.intp], a: FloatArray, b: FloatArray, m: int) -> sp.csr_matrix:
+    """(n, m) sparse matrix with ``a`` in column j and ``b`` in column j + 1 of each row."""
+    n = j.size
+    rows = np.repeat(np.arange(n), 2)
+    cols = np.stack([j, j + 1], axis=1).ravel()
+    vals = np.stack([a, b], axis=1).ravel()
+    return sp.csr_matrix((vals, (rows, cols)), shape=(n, m))
+
+
+def hat_values_sparse(t: FloatArray, knots: FloatArray) -> sp.csr_matrix:
+    """(n, M) sparse values of the piecewise-linear hat functions on ``knots`` at ``t``."""
+    j, h, dk = _hat_parts(np.clip(t, knots[0], knots[-1]), knots)
+    w = np.clip(h / dk, 0.0, 1.0)
+    return _two_per_row(j, 1.0 - w, w, knots.size)
+
+
 def hat_values(t: FloatArray, knots: FloatArray) -> FloatArray:
     """(n, M) values of the piecewise-linear hat functions on ``knots`` at times ``t``."""
-    eye = np.eye(knots.size)
-    return np.stack([np.interp(t, knots, eye[j]) for j in range(knots.size)], axis=1)
+    return np.asarray(hat_values_sparse(t, knots).toarray(), dtype=float)
+
+
+def knot_cumulative(knots: FloatArray) -> FloatArray:
+    """(M, M) Q with (Q v)_k = int_{knots[0]}^{knots[k]} b dt, b piecewise linear through v."""
+    m = knots.size
+    half = 0.5 * np.diff(knots)
+    step = np.zeros((m - 1, m))
+    step[np.arange(m - 1), np.arange(m - 1)] = half
+    step[np.arange(m - 1), np.arange(1, m)] += half
+    return np.vstack([np.zeros((1, m)), np.cumsum(step, axis=0)])
+
+
+def hat_integral_parts(t: FloatArray, knots: FloatArray) -> tuple[sp.csr_matrix, sp.csr_matrix]:
+    """Sparse (R, D), each (n, M), with hat_integrals(t, knots) = R @ knot_cumulative(knots) + D.
+
+    R picks the knot interval of each t; D holds the partial integral inside it (two
+    entries a row), so the design of the heading fit never needs its dense (n, M) form.
+    """
+    j, h, dk = _hat_parts(t, knots)
+    n, m = t.size, knots.size
+    pick = sp.csr_matrix((np.ones(n), (np.arange(n), j)), shape=(n, m))
+    return pick, _two_per_row(j, h - 0.5 * h * h / dk, 0.5 * h * h / dk, m)
 
 
 def hat_integrals(t: FloatArray, knots: FloatArray) -> FloatArray:
     """(n, M) integrals from knots[0] to t of the hat functions on ``knots`` (exact)."""
-    eye = np.eye(knots.size)
-    return np.stack([_bias_integral_rows(t, knots, eye[j]) for j in range(knots.size)], axis=1)
+    pick, part = hat_integral_parts(t, knots)
+    return np.asarray(pick @ knot_cumulative(knots) + part.toarray(), dtype=float)
 
 
 def _bias_integral_rows(t: FloatArray, knots: FloatArray, values: FloatArray) -> FloatArray:
@@ -177,6 +223,65 @@ def _bias_integral_rows(t: FloatArray, knots: FloatArray, values: FloatArray) ->
     slope = (values[j + 1] - values[j]) / (knots[j + 1] - knots[j])
     out = at_knots[j] + values[j] * h + 0.5 * slope * h * h
     return np.asarray(out, dtype=float)
+
+
+def knot_constraints(knots: FloatArray) -> sp.csr_matrix:
+    """(M, 2 + 2M) E with E z = 0 iff z's integrals c equal Q kb (:func:`knot_cumulative`).
+
+    z = [psi0, s, c_0..c_{M-1}, kb_0..kb_{M-1}]: c_0 = 0 and
+    c_k - c_{k-1} - (kb_{k-1} + kb_k) Delta_{k-1} / 2 = 0 (the trapezoid of b), a band.
+    """
+    m = knots.size
+    half = 0.5 * np.diff(knots)
+    k = np.arange(1, m)
+    rows = np.concatenate(([0], k, k, k, k))
+    cols = np.concatenate(([2], 2 + k, 1 + k, 2 + m + k - 1, 2 + m + k))
+    vals = np.concatenate(([1.0], np.ones(m - 1), -np.ones(m - 1), -half, -half))
+    return sp.csr_matrix((vals, (rows, cols)), shape=(m, 2 + 2 * m))
+
+
+@dataclass(frozen=True)
+class _SparseSolution:
+    """Solution of the heading fit's normal equations in z-space, and its factorisation."""
+
+    x: FloatArray
+    lu: object
+    scale: FloatArray
+
+    def var(self, i: int) -> float:
+        """(N^-1)_ii of the x-space normal matrix (i < 2: psi0 or s)."""
+        e = np.zeros(self.scale.size)
+        e[i] = 1.0 / self.scale[i]
+        return float(self.lu.solve(e)[i] / self.scale[i])  # type: ignore[attr-defined]
+
+
+def _solve_sparse(G: sp.spmatrix, E: sp.csr_matrix, rhs: FloatArray) -> _SparseSolution:
+    """min |Z z - v|^2 + fixed terms subject to E z = 0, through the sparse KKT system.
+
+    ``G`` = Z^T Z + fixed terms (z-space), ``rhs`` = Z^T v + fixed terms.  The same solution
+    as the dense x-space normal equations, in O(knots) instead of O(knots^3); the z columns
+    are scaled to unit diagonal as in :func:`_solve_normal`.
+    """
+    from scipy.sparse.linalg import splu
+
+    n_z, n_c = G.shape[0], E.shape[0]
+    # a variable nothing observes (psi0 without a course sample) is set to 0, as the dense
+    # solve's minimum-norm fallback does
+    # (only psi0 and s: the integrals c have no diagonal of their own at the last knot but are
+    # fixed by E; the knots' offsets always have their priors)
+    unseen = np.zeros(n_z, dtype=bool)
+    unseen[:2] = G.diagonal()[:2] <= 0.0
+    if unseen.any():
+        G = G + sp.diags(unseen.astype(float))
+    d = np.sqrt(np.clip(G.diagonal(), 1e-300, None))
+    scale = np.concatenate((d, np.ones(n_c)))
+    Dinv = sp.diags(1.0 / scale)
+    K = (Dinv @ sp.bmat([[G, E.T], [E, None]]) @ Dinv).tocsc()
+    lu = splu(K)
+    sol = lu.solve(np.concatenate((rhs, np.zeros(n_c))) / scale) / scale
+    m = (n_z - 2) // 2
+    x = np.concatenate((sol[:2], sol[2 + m:n_z]))
+    return _SparseSolution(np.asarray(x, dtype=float), lu, scale)
 
 
 def _solve_normal(N: FloatArray, g: FloatArray) -> FloatArray:
@@ -229,12 +334,31 @@ def fit_heading(
     y = samples.course[idx] - (course_offset[idx] if course_offset is not None else 0.0)
     sig = samples.sigma[idx]
     i_meas = integ[rows]
-    A_c = np.zeros((rows.size, 2 + M))
-    A_c[:, 0] = 1.0
-    A_c[:, 1] = i_meas
-    A_c[:, 2:] = -hat_integrals(t[rows], knots)
+    # the design [1, i, -hat_integrals] / sigma = Z @ T with Z sparse (a few entries a row)
+    # and T = [[I2, 0], [0, Q], [0, I_M]]: every product below is O(epochs + M^2), never the
+    # dense (epochs, M) matrix (whose Gram matrix made the fit quadratic in the drive's length)
+    pick, part = hat_integral_parts(t[rows], knots)
+    sparse_path = M > DENSE_MAX_KNOTS
+    Q = knot_cumulative(knots) if not sparse_path else np.zeros((0, M))
+    inv_sig = sp.diags(1.0 / sig)
+    Z = sp.hstack([sp.csr_matrix(np.column_stack([np.ones(rows.size), i_meas]) / sig[:, None]),
+                   -(inv_sig @ pick), -(inv_sig @ part)]).tocsr()
+    T = np.zeros((2 + 2 * M, 2 + M) if not sparse_path else (0, 0))
+    if not sparse_path:
+        T[0, 0] = T[1, 1] = 1.0
+        T[2:2 + M, 2:] = Q
+        T[2 + M:, 2:] = np.eye(M)
+
+    def gram(z: sp.csr_matrix) -> FloatArray:
+        return np.asarray(T.T @ (z.T @ z).toarray() @ T, dtype=float)
+
+    def predict(x: FloatArray) -> FloatArray:
+        kb = x[2:]
+        cum = (Q @ kb if not sparse_path else
+               np.concatenate(([0.0], np.cumsum(0.5 * (kb[1:] + kb[:-1]) * np.diff(knots)))))
+        return np.asarray(x[0] + x[1] * i_meas - (pick @ cum + part @ kb), dtype=float)
     # standstill pseudo-measurements of the offset: 1-s block means of the raw gyro
-    st_rows_A = np.zeros((0, 2 + M))
+    st_hat = sp.csr_matrix((0, M))
     st_y = np.zeros(0)
     st_sig = np.zeros(0)
     if still_rows is not None and wz_raw is not None and still_rows.size > 10:
@@ -246,8 +370,7 @@ def fit_heading(
         means = sums[keep] / counts[keep]
         tb = tsum[keep] / counts[keep]
         noise = float(np.std(wz_raw[still_rows])) if still_rows.size > 1 else 1e-3
-        st_rows_A = np.zeros((means.size, 2 + M))
-        st_rows_A[:, 2:] = hat_values(tb, knots)
+        st_hat = hat_values_sparse(tb, knots)
         st_y = means
         st_sig = np.full(means.size, max(noise, 1e-5)) / np.sqrt(counts[keep]) + 2e-5
     # priors: offset level, random walk between knots, scale correction
@@ -271,20 +394,36 @@ def fit_heading(
     d = np.unwrap(wrap_angle(y - i_meas)) + i_meas if rows.size else y
     resid_std = np.inf
     iterations = 0
-    W = A_c / sig[:, None] if rows.size else np.zeros((0, 2 + M))
-    S = st_rows_A / st_sig[:, None]
-    Pw = P / p_sig[:, None]
-    N_fixed = S.T @ S + Pw.T @ Pw
-    g_fixed = S.T @ (st_y / st_sig) + Pw.T @ (p_y / p_sig)
-    N_all = W.T @ W
+    S = sp.diags(1.0 / st_sig) @ st_hat
+    Pw = sp.csr_matrix(P / p_sig[:, None])
+    N_fixed_sp = (Pw.T @ Pw + sp.block_diag([sp.csr_matrix((2, 2)), S.T @ S])).tocsr()
+    g_fixed = np.asarray(Pw.T @ (p_y / p_sig), dtype=float)
+    g_fixed[2:] += S.T @ (st_y / st_sig)
+    if sparse_path:
+        # x = Sel z: psi0, s and the knots' offsets kb out of z = [psi0, s, c, kb]
+        sel = sp.csr_matrix((np.ones(2 + M), (np.arange(2 + M),
+                             np.concatenate(([0, 1], 2 + M + np.arange(M))))), shape=(2 + M, 2 + 2 * M))
+        G_fixed = sel.T @ N_fixed_sp @ sel
+        E = knot_constraints(knots)
+        N_all = np.zeros((0, 0))
+        N = N_all
+    else:
+        N_fixed = np.asarray(N_fixed_sp.toarray(), dtype=float)
+        N_all = gram(Z)
+    solution: _SparseSolution | None = None
     for iterations in range(1, max_iter + 1):  # noqa: B007
-        out = ~used
-        N = N_fixed + N_all - (W[out].T @ W[out] if out.any() else 0.0)
-        g = g_fixed + W.T @ np.where(used, (d - i_meas) / sig, 0.0)
-        x = _solve_normal(N, g)
+        v_used = Z.T @ np.where(used, (d - i_meas) / sig, 0.0)
+        if sparse_path:
+            Zu = Z[used] if rows.size else Z
+            solution = _solve_sparse(G_fixed + Zu.T @ Zu, E, sel.T @ g_fixed + v_used)
+            x = solution.x
+        else:
+            out = ~used
+            N = N_fixed + N_all - (gram(Z[out]) if out.any() else 0.0)
+            x = _solve_normal(N, g_fixed + T.T @ v_used)
         if rows.size == 0:
             break
-        pred = A_c @ x + i_meas
+        pred = predict(x) + i_meas
         res = wrap_angle(y - pred)
         d = pred + res  # re-wrap about the prediction
         kept = res[used]
@@ -300,10 +439,10 @@ def fit_heading(
     s_sigma = float("inf")
     if rows.size and used.sum() > 3:
         try:
-            cov_ss = float(np.linalg.inv(N)[1, 1])
-        except np.linalg.LinAlgError:
+            cov_ss = solution.var(1) if solution is not None else float(np.linalg.inv(N)[1, 1])
+        except (np.linalg.LinAlgError, RuntimeError):
             cov_ss = float("inf")
-        z = (wrap_angle(y - (A_c @ x + i_meas)) / sig)[used]
+        z = (wrap_angle(y - (predict(x) + i_meas)) / sig)[used]
         excess = max(float(np.mean(z * z)), 1.0)
         span = max(float(t[rows[-1]] - t[rows[0]]), 1e-6)
         corr = max(float(used.sum()) / span * HEADING_CORR_S, 1.0)

@@ -138,7 +138,12 @@ def fit_slip_lag(t_rows: FloatArray, rate_term: FloatArray, innovation: FloatArr
     tau > ``LAG_MIN_Z`` sigma and below ``LAG_MAX_S`` (a lag, not a lead; otherwise the
     steady-state relation is kept and the note says why).
     """
-    from sideslip.methods.doppler_stats import block_jackknife_std, honest_std, time_blocks
+    from sideslip.methods.doppler_stats import (
+        block_jackknife_sums_std,
+        honest_std,
+        ratio_of_sums,
+        time_blocks,
+    )
 
     ok = np.isfinite(rate_term) & np.isfinite(innovation)
     x, y, tt = rate_term[ok], innovation[ok], t_rows[ok]
@@ -152,12 +157,8 @@ def fit_slip_lag(t_rows: FloatArray, rate_term: FloatArray, innovation: FloatArr
     formal = float(np.std(res)) / np.sqrt(sxx) * np.sqrt(corr)
     labels = time_blocks(tt, LAG_BLOCK_S)
 
-    def fit(mask: NDArray[np.bool_]) -> float:
-        d = float(np.sum(x[mask] ** 2))
-        return float(np.sum(x[mask] * y[mask]) / d) if d > 0 else np.nan
-
-    sigma = honest_std(formal, max(int(np.unique(labels).size) - 1, 1),
-                       block_jackknife_std(labels, fit))
+    jack = block_jackknife_sums_std(labels, np.stack([x * y, x * x]), ratio_of_sums)
+    sigma = honest_std(formal, max(int(np.unique(labels).size) - 1, 1), jack)
     if not np.isfinite(sigma) or tau < min_z * sigma:
         return SlipLag(tau, sigma, False,
                        f"lag {tau:.3f} +- {sigma:.2g} s not significant: steady-state relation kept")

@@ -204,16 +204,20 @@ class AyBiasScan:
 
 def _course_at(
     row: int, t: FloatArray, samples: CourseSamples, offset: FloatArray, half_s: float,
-    good: NDArray[np.bool_] | None = None,
+    good: NDArray[np.bool_] | None = None, ts: FloatArray | None = None,
 ) -> float | None:
     """Median of the (offset-corrected) course within +-half_s of ``row``, or None.
+
+    ``ts``: the course samples' times ``t[samples.rows]`` when the caller has them (one
+    gather per drive instead of one per curve end, which was quadratic in the drive's length).
 
     The median (of the course unwrapped about its first sample) resists a multipath epoch;
     ``good`` masks samples already flagged as outliers by the heading fit.
     """
     if samples.rows.size == 0:
         return None
-    ts = t[samples.rows]
+    if ts is None:
+        ts = t[samples.rows]
     lo, hi = np.searchsorted(ts, [t[row] - half_s, t[row] + half_s + 1e-9])
     keep = np.arange(lo, hi)
     if good is not None:
@@ -255,6 +259,7 @@ def curve_windows(
     # course samples around each end: +-1.5 s, wider for slow receivers (three epochs at least)
     gnss_dt = float(np.median(np.diff(t[samples.rows]))) if samples.rows.size > 1 else 0.1
     half = max(END_HALF_S, 1.5 * gnss_dt)
+    ts = t[samples.rows]
     for s0_, s1_ in zip(starts, stops, strict=True):
         s0, s1 = int(s0_), int(s1_)
         if (s1 - s0) * dt < MIN_CURVE_S or s0 <= last_stop:
@@ -269,8 +274,8 @@ def curve_windows(
             continue
         a = max(a - round(1.0 / dt), 0)  # a little straight driving at each end
         b = min(b + round(1.0 / dt), n - 1)
-        ca = _course_at(a, t, samples, course_offset, half, good)
-        cb = _course_at(b, t, samples, course_offset, half, good)
+        ca = _course_at(a, t, samples, course_offset, half, good, ts)
+        cb = _course_at(b, t, samples, course_offset, half, good, ts)
         if ca is None or cb is None:
             continue
         turn = integ[b] - integ[a]
@@ -357,32 +362,54 @@ def scan_ay_bias(
                 value += float(np.clip(0.5 * (cost[j - 1] - cost[j + 1]) / den, -1.0, 1.0) * step)
         return value
 
+    def leave_one_out(mask: NDArray[np.bool_]) -> tuple[NDArray[np.intp], NDArray[np.intp],
+                                                         FloatArray, FloatArray]:
+        """:func:`solve` for every curve of ``mask`` left out in turn, from the sums over
+        ``mask`` minus each curve's share: O(curves x grid), not O(curves^2 x grid).
+
+        Returns the curves (indices), each fit's grid index, scale factors and summed costs
+        (rows: left-out curve; the cost is expanded, sum c^2 - 2 s sum c t + s^2 sum t^2).
+        """
+        idx = np.flatnonzero(mask)
+        ca, ta = closure[idx], turned[idx]
+        ct, tt, cc = ca * ta, ta * ta, ca * ca
+        ct_o, tt_o, cc_o = ct.sum(axis=0) - ct, tt.sum(axis=0) - tt, cc.sum(axis=0) - cc
+        sc = np.zeros_like(ct_o)
+        if use_scale and idx.size - 1 >= 3:
+            sc = np.clip(ct_o / np.maximum(tt_o, 1e-12), -0.05, 0.05)
+        cost = np.maximum(cc_o - 2.0 * sc * ct_o + sc * sc * tt_o, 0.0)
+        return idx, np.argmin(cost, axis=1), sc, cost
+
+    def refine_rows(cost: FloatArray, j: NDArray[np.intp]) -> FloatArray:
+        """:func:`refine` for each row of ``cost`` (a cost over the grid) at its index j."""
+        r = np.arange(j.size)
+        jj = np.clip(j, 1, grid.size - 2)
+        cm, c0, cp = cost[r, jj - 1], cost[r, jj], cost[r, jj + 1]
+        den = cm - 2.0 * c0 + cp
+        ok = (j > 0) & (j < grid.size - 1) & (den > 0)
+        off = np.clip(0.5 * (cm - cp) / np.where(ok, den, 1.0), -1.0, 1.0) * step
+        return np.asarray(grid[j] + np.where(ok, off, 0.0), dtype=float)
+
     def jackknife_std(mask: NDArray[np.bool_]) -> float:
         """Delete-one-curve jackknife 1-sigma of the joint value (Efron & Tibshirani 1993,
         ch. 11): the spread across curves, whatever the closures' error model."""
-        idx = np.flatnonzero(mask)
-        if idx.size < 4:
+        if mask.sum() < 4:
             return np.inf
-        vals = np.empty(idx.size)
-        for m, c in enumerate(idx):
-            sub = mask.copy()
-            sub[c] = False
-            j, sc = solve(sub)
-            vals[m] = refine(sub, j, sc)
-        return float(np.sqrt((idx.size - 1) / idx.size * np.sum((vals - vals.mean()) ** 2)))
+        _idx, j, _sc, cost = leave_one_out(mask)
+        vals = refine_rows(cost, j)
+        n = vals.size
+        return float(np.sqrt((n - 1) / n * np.sum((vals - vals.mean()) ** 2)))
 
     # outlier curves (a multipath end, a transient): externally studentised residuals -- each
     # curve's closure against the fit of the others, over the others' scatter; the worst goes
     # while above 4 (least squares alone would spread one bad curve over all)
     active = np.ones(n_c, dtype=bool)
     while active.sum() > 4:
-        idx = np.flatnonzero(active)
-        score = np.empty(idx.size)
-        for m, c in enumerate(idx):
-            mask = active.copy()
-            mask[c] = False
-            j, sc = solve(mask)
-            score[m] = abs(closure[c, j] - sc[j] * turned[c, j]) / rms(mask, j, sc)
+        idx, j, sc, cost = leave_one_out(active)
+        r = np.arange(idx.size)
+        dof = max(idx.size - 1 - (2 if use_scale else 1), 1)
+        spread = np.maximum(np.sqrt(cost[r, j] / dof), CLOSURE_FLOOR)
+        score = np.abs(closure[idx, j] - sc[r, j] * turned[idx, j]) / spread
         worst = int(np.argmax(score))
         if score[worst] <= 4.0:
             break

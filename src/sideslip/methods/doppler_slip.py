@@ -129,7 +129,12 @@ from sideslip.methods.doppler_roll import (
     roll_from_lateral,
     scan_ay_bias,
 )
-from sideslip.methods.doppler_stats import block_jackknife_std, honest_std, time_blocks
+from sideslip.methods.doppler_stats import (
+    block_jackknife_sums_std,
+    honest_std,
+    ratio_of_sums,
+    time_blocks,
+)
 from sideslip.methods.registry import SPEED, register
 from sideslip.models.dead_reckoning import dead_reckon, horizontal_speed, horizontal_yaw_rate
 from sideslip.signals import hold, speed_raw, vehicle_speed
@@ -235,13 +240,19 @@ def fit_slip_gain(
         xk, yk = x[keep], y[keep]
         labels = time_blocks(ts[keep], K_BLOCK_S)
 
-        def slope(mask: NDArray[np.bool_]) -> float:
-            xm, ym = xk[mask], yk[mask]
-            d = float(np.sum((xm - xm.mean()) ** 2))
-            return -float(np.sum((xm - xm.mean()) * (ym - ym.mean())) / d) if d > 0 else np.nan
+        # centred on the kept samples' means first (the slope does not move; the sums'
+        # round-off stays that of the two-pass form)
+        xc, yc = xk - xk.mean(), yk - yk.mean()
+
+        def slope(loo: FloatArray) -> FloatArray:
+            n_, sx, sy, sxx_, sxy = loo
+            d = sxx_ - sx * sx / n_
+            return np.where(d > 0, -(sxy - sx * sy / n_) / np.where(d > 0, d, 1.0), np.nan)
 
         n_blocks = int(np.unique(labels).size)
-        k_std = honest_std(k_std, max(n_blocks - 2, 1), block_jackknife_std(labels, slope))
+        jack = block_jackknife_sums_std(
+            labels, np.stack([np.ones_like(xc), xc, yc, xc * xc, xc * yc]), slope)
+        k_std = honest_std(k_std, max(n_blocks - 2, 1), jack)
     reason = ""
     if span < K_MIN_GY_SPAN:
         reason = f"G_y of the curve samples spans {span:.2f} m/s^2 < {K_MIN_GY_SPAN}"
@@ -287,11 +298,9 @@ def wheel_scale_factor(
         formal = max(s, 1e-3) / float(np.sqrt(np.sum(xk**2))) * float(np.sqrt(corr))
         labels = time_blocks(tk, K_BLOCK_S)
 
-        def fit(mask: NDArray[np.bool_]) -> float:
-            return float(np.sum(xk[mask] * yk[mask]) / np.sum(xk[mask] ** 2))
-
         n_blocks = int(np.unique(labels).size)
-        sigma = honest_std(formal, max(n_blocks - 1, 1), block_jackknife_std(labels, fit))
+        jack = block_jackknife_sums_std(labels, np.stack([xk * yk, xk * xk]), ratio_of_sums)
+        sigma = honest_std(formal, max(n_blocks - 1, 1), jack)
         # GNSS speed and rolling speed also differ by the driven tyres' longitudinal slip and
         # the radius' growth with speed (0.1-0.3 % for road cars, Gillespie 1992 ch. 2): a
         # model term the residuals cannot show, since it moves every sample alike

@@ -38,7 +38,12 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from sideslip.methods.doppler_stats import block_jackknife_std, honest_std, time_blocks
+from sideslip.methods.doppler_stats import (
+    block_jackknife_sums_std,
+    honest_std,
+    ratio_of_sums,
+    time_blocks,
+)
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -152,12 +157,9 @@ def identify_roll_gradient(
     formal = float(np.std(res)) / np.sqrt(sxx) * np.sqrt(corr)
     blocks: NDArray[np.intp] = lab if curves >= 4 else time_blocks(tt, BLOCK_S)
 
-    def fit(mask: BoolArray) -> float:
-        d = float(np.sum(x[mask] ** 2))
-        return float(np.sum(x[mask] * y[mask]) / d) if d > 0 else float("nan")
-
     n_blocks = int(np.unique(blocks).size)
-    sigma = honest_std(formal, max(n_blocks - 1, 1), block_jackknife_std(blocks, fit))
+    jack = block_jackknife_sums_std(blocks, np.stack([x * y, x * x]), ratio_of_sums)
+    sigma = honest_std(formal, max(n_blocks - 1, 1), jack)
     sigma = float(np.hypot(sigma, SCALE_TERM))
     rows = int(x.size)
     span = float(np.percentile(x, 95) - np.percentile(x, 5))
