@@ -92,9 +92,8 @@ def _mode_for(real: str) -> int:
 
 
 def _write_stdout(write: Writer) -> None:
-    fd, tmp = tempfile.mkstemp(prefix=".sideslip-stdout.", suffix=".part")
+    fd, tmp = _registered_temp(tempfile.gettempdir(), ".sideslip-stdout.")
     os.close(fd)
-    _LIVE_TEMPS.add(tmp)
     try:
         write(Path(tmp))
         sys.stdout.flush()
@@ -105,6 +104,21 @@ def _write_stdout(write: Writer) -> None:
         with contextlib.suppress(OSError):
             os.unlink(tmp)
         _LIVE_TEMPS.discard(tmp)
+
+
+_HELD_SIGNALS = {signal.SIGINT, signal.SIGTERM, signal.SIGHUP}
+
+
+def _registered_temp(folder: str, prefix: str) -> tuple[int, str]:
+    """A temporary file in ``folder``, registered for clean-up before any signal can land:
+    a SIGINT/SIGTERM between creating the file and recording it would leave it behind."""
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, _HELD_SIGNALS)
+    try:
+        fd, tmp = tempfile.mkstemp(dir=folder, prefix=prefix, suffix=".part")
+        _LIVE_TEMPS.add(tmp)
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+    return fd, tmp
 
 
 def atomic_write(path: PathLike, write: Writer) -> None:
@@ -123,10 +137,9 @@ def atomic_write(path: PathLike, write: Writer) -> None:
         real = os.path.realpath(name)  # through symbolic links, to the file to replace
         folder = os.path.dirname(real)
         os.makedirs(folder, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(dir=folder, prefix=f".{os.path.basename(real)}.", suffix=".part")
+        fd, tmp = _registered_temp(folder, f".{os.path.basename(real)}.")
     except OSError as exc:
         raise InputError(name, f"cannot write ({exc.strerror or exc}): expected a writable path") from None
-    _LIVE_TEMPS.add(tmp)
     grouped = False
     try:
         os.close(fd)
@@ -160,8 +173,7 @@ def output_group() -> Iterator[None]:
     _GROUP.append(pending)
     try:
         yield
-        blocked = {signal.SIGINT, signal.SIGTERM, signal.SIGHUP}
-        old = signal.pthread_sigmask(signal.SIG_BLOCK, blocked)
+        old = signal.pthread_sigmask(signal.SIG_BLOCK, _HELD_SIGNALS)
         try:
             for tmp, real in pending:
                 os.replace(tmp, real)
@@ -195,12 +207,13 @@ def _check_folder_writable(shown: str, folder: str) -> None:
     if not os.path.isdir(base):
         raise InputError(shown, f"{base} is a file, not a folder: expected a path in a writable folder")
     try:
-        fd, probe = tempfile.mkstemp(dir=base, prefix=".sideslip-probe.")
+        fd, probe = _registered_temp(base, ".sideslip-probe.")
     except OSError as exc:
         raise InputError(shown, f"cannot write in {base} ({exc.strerror or exc}): expected a writable "
                          "folder") from None
     os.close(fd)
     os.unlink(probe)
+    _LIVE_TEMPS.discard(probe)
 
 
 def check_writable(path: PathLike, *, folder: bool = False) -> None:
