@@ -206,14 +206,16 @@ def _check_folder_writable(shown: str, folder: str) -> None:
     base = _first_existing(folder)
     if not os.path.isdir(base):
         raise InputError(shown, f"{base} is a file, not a folder: expected a path in a writable folder")
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, _HELD_SIGNALS)  # never left behind
     try:
-        fd, probe = _registered_temp(base, ".sideslip-probe.")
+        fd, probe = tempfile.mkstemp(dir=base, prefix=".sideslip-probe.")
+        os.close(fd)
+        os.unlink(probe)
     except OSError as exc:
         raise InputError(shown, f"cannot write in {base} ({exc.strerror or exc}): expected a writable "
                          "folder") from None
-    os.close(fd)
-    os.unlink(probe)
-    _LIVE_TEMPS.discard(probe)
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)
 
 
 def check_writable(path: PathLike, *, folder: bool = False) -> None:

@@ -125,10 +125,27 @@ def _estimate(spec: JobSpec, local_drive: Path, out_local: Path) -> JobResult:
     )
 
 
+def _remove_stale_temps(stem: Path, before: float) -> None:
+    """Delete temporary files of this drive's outputs (``.<name>_est.parquet.XXXX.part``, ...)
+    left by an earlier attempt that died mid-write (a worker killed by SIGKILL cannot clean
+    up); only files older than this attempt's start, so a live concurrent attempt keeps its own."""
+    folder, base = stem.parent, stem.name
+    if not folder.is_dir():
+        return
+    for pattern in (f".{base}_*.part", f".{base}.*.part"):
+        for tmp in folder.glob(pattern):
+            try:
+                if tmp.stat().st_mtime < before:
+                    tmp.unlink()
+            except OSError:
+                pass
+
+
 def run_job(spec: JobSpec) -> JobResult:
     """Estimate and evaluate one drive; write its outputs and manifest (never raises for bad
     input or a failing method: the result carries the error line)."""
     start = time.perf_counter()
+    started_wall = time.time()
     try:
         fp = manifest.fingerprint(
             manifest.drive_sha256(spec.drive) if storage.exists(spec.drive) else "",
@@ -156,6 +173,8 @@ def run_job(spec: JobSpec) -> JobResult:
                 res = _estimate(spec, local_drive, Path(target))
         res = JobResult(**{**asdict(res), "seconds": time.perf_counter() - start})
         manifest.write(spec.out_dir, spec.key, fp, _result_dict(res))
+        if not storage.is_url(spec.out_dir):
+            _remove_stale_temps(Path(storage.join(spec.out_dir, spec.key)), started_wall)
         return res
     except InputError as exc:
         return JobResult(spec.drive, spec.key, "failed", seconds=time.perf_counter() - start, error=str(exc))
