@@ -126,7 +126,7 @@ def _estimate(spec: JobSpec, local_drive: Path, out_local: Path) -> JobResult:
 
 
 def _remove_stale_temps(stem: Path, before: float) -> None:
-    """Delete temporary files of this drive's outputs (``.<name>_est.parquet.XXXX.part``, ...)
+    """Delete temporary files of this drive's outputs (``.<name>_est.parquet.<random>.part``, ...)
     left by an earlier attempt that died mid-write (a worker killed by SIGKILL cannot clean
     up); only files older than this attempt's start, so a live concurrent attempt keeps its own."""
     folder, base = stem.parent, stem.name
