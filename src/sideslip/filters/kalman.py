@@ -26,7 +26,8 @@ Kernels:
   gate, Huber weight and NIS-proportional variance inflation) and
   :func:`update_robust_pair_ws_nb` (a two-row measurement, e.g. a GNSS fix, weighted on its
   2-D Mahalanobis distance);
-* smoother: :func:`rts_step_ws_nb` (one backward step, sparse F), :func:`rts_smooth_nb`;
+* smoother: :func:`rts_step_ws_nb` (one backward step, sparse F) = :func:`rts_gain_ws_nb`
+  (from the forward pass alone) + :func:`rts_update_ws_nb` (the recursion), :func:`rts_smooth_nb`;
 * linear algebra and storage: :func:`cholesky_ws_nb`, :func:`cho_solve_rows_ws_nb`,
   :func:`pack_upper_nb` / :func:`unpack_upper_nb` (a symmetric matrix's upper triangle, e.g. in
   float32: a quarter of the memory of the full float64 matrix).
@@ -456,30 +457,14 @@ def unpack_upper_nb(packed: NDArray, P: NDArray) -> None:
 # Rauch-Tung-Striebel smoother
 # ------------------------------------------------------------------------------------------
 @numba.njit(cache=True, fastmath=FASTMATH)
-def rts_step_ws_nb(
-    x: NDArray,
-    P: NDArray,
-    xn: NDArray,
-    Pn: NDArray,
-    F: NDArray,
-    rows: NDArray,
-    xs_next: NDArray,
-    Ps_next: NDArray,
-    work: NDArray,
-) -> None:
-    """One RTS step in place of ``x``, ``P`` (filtered at k -> smoothed at k).
-
-    ``xn``, ``Pn``: the prediction from (x, P) to k+1 with Jacobian ``F`` (non-zero columns
-    per row in ``rows``, as :func:`predict_rows_ws_nb`); ``xs_next``, ``Ps_next``: the smoothed
-    state at k+1; ``work`` (3, n, n) (:func:`rts_workspace`).  The gain's transpose
-    C' = Pn^-1 F P comes from the Cholesky factor of Pn (no inverse), then
-    x += C (xs_next - xn) and P += C (Ps_next - Pn) C' (upper triangle, mirrored).
-    """
-    n = x.size
+def rts_gain_ws_nb(P: NDArray, Pn: NDArray, F: NDArray, rows: NDArray, B: NDArray, L: NDArray) -> None:
+    """The transposed RTS gain ``B = C' = Pn^-1 F P`` of the step from the filtered ``P`` at k
+    to its prediction ``Pn`` at k+1 (Jacobian ``F``, non-zero columns per row in ``rows`` as
+    :func:`predict_rows_ws_nb`), from the Cholesky factor of Pn (``L`` scratch; no inverse).
+    It depends on the forward pass only, so a smoother may compute it ahead of the backward
+    recursion (:func:`rts_update_ws_nb`)."""
+    n = P.shape[0]
     w = rows.shape[1]
-    L = work[0]
-    B = work[1]
-    T = work[2]
     cholesky_ws_nb(Pn, L)
     for i in range(n):  # B = F P
         for j in range(n):
@@ -491,7 +476,18 @@ def rts_step_ws_nb(
             f = F[i, col]
             for j in range(n):
                 B[i, j] += f * P[col, j]
-    cho_solve_rows_ws_nb(L, B)  # B <- Pn^-1 F P = C'
+    cho_solve_rows_ws_nb(L, B)
+
+
+@numba.njit(cache=True, fastmath=FASTMATH)
+def rts_update_ws_nb(
+    x: NDArray, P: NDArray, xn: NDArray, Pn: NDArray, B: NDArray, xs_next: NDArray,
+    Ps_next: NDArray, T: NDArray,
+) -> None:  # fmt: skip
+    """The RTS recursion with the gain ``B = C'`` of :func:`rts_gain_ws_nb`, in place of the
+    filtered ``x``, ``P`` at k: ``x += C (xs_next - xn)``, ``P += C (Ps_next - Pn) C'`` (upper
+    triangle, mirrored); ``T`` (n, n) scratch."""
+    n = x.size
     for m in range(n):  # x += C dx = B' dx
         d = xs_next[m] - xn[m]
         for i in range(n):
@@ -511,6 +507,29 @@ def rts_step_ws_nb(
     for i in range(n):
         for j in range(i):
             P[i, j] = P[j, i]
+
+
+@numba.njit(cache=True)
+def rts_step_ws_nb(
+    x: NDArray,
+    P: NDArray,
+    xn: NDArray,
+    Pn: NDArray,
+    F: NDArray,
+    rows: NDArray,
+    xs_next: NDArray,
+    Ps_next: NDArray,
+    work: NDArray,
+) -> None:
+    """One RTS step in place of ``x``, ``P`` (filtered at k -> smoothed at k).
+
+    ``xn``, ``Pn``: the prediction from (x, P) to k+1 with Jacobian ``F`` (non-zero columns
+    per row in ``rows``, as :func:`predict_rows_ws_nb`); ``xs_next``, ``Ps_next``: the smoothed
+    state at k+1; ``work`` (3, n, n) (:func:`rts_workspace`).  :func:`rts_gain_ws_nb` then
+    :func:`rts_update_ws_nb`.
+    """
+    rts_gain_ws_nb(P, Pn, F, rows, work[1], work[0])
+    rts_update_ws_nb(x, P, xn, Pn, work[1], xs_next, Ps_next, work[2])
 
 
 @numba.njit(cache=True)

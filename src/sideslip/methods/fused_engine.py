@@ -24,7 +24,8 @@ import numpy as np
 from sideslip.filters.kalman import (
     pack_upper_nb,
     predict_rows_ws_nb,
-    rts_step_ws_nb,
+    rts_gain_ws_nb,
+    rts_update_ws_nb,
     unpack_upper_nb,
     update_robust_pair_ws_nb,
     update_robust_scalar_ws_nb,
@@ -109,8 +110,8 @@ def _adapt(infl, nis, dt, cfg):
     return min(max(infl * math.exp(a * (min(nis, 25.0) - 1.0)), 1.0), cfg[C_ADAPT_MAX])
 
 
-@numba.njit(cache=True)
-def run_nodes(
+@numba.njit(cache=True, nogil=True)
+def forward_nodes(
     tn,
     U,
     vw,
@@ -136,9 +137,10 @@ def run_nodes(
     cfg,
     smooth,
 ):
-    """Forward EKF over the nodes and (``smooth``) the RTS pass; see the module docstring.
+    """Forward EKF over the nodes; see the module docstring.
 
-    Returns ``(xs, var, cov_vxvy, nis, counts)``: states (N, nx), their variances, the
+    Returns ``(xs, Ps, var, cov_vxvy, nis, counts)``: filtered states (N, nx), (``smooth``)
+    their covariances' packed float32 upper triangles (N, nx (nx + 1) / 2), the variances, the
     v_x-v_y covariance, the NIS per channel (N, N_CHANNELS), and counts
     ``[gnss accepted, gnss down-weighted, axle accepted, axle down-weighted]``.
     """
@@ -266,22 +268,92 @@ def run_nodes(
         for i in range(nx):
             var[k, i] = P[i, i]
         cov_vxvy[k] = P[IVX, IVY]
-    if smooth and N > 1:
-        rts_work = np.zeros((3, nx, nx))  # sideslip.filters.kalman.rts_workspace
-        Pk = np.zeros((nx, nx))
-        Ps_next = np.zeros((nx, nx))
-        xk = np.zeros(nx)
-        unpack_upper_nb(Ps[N - 1], Ps_next)
-        for k in range(N - 2, -1, -1):
-            unpack_upper_nb(Ps[k], Pk)
-            xk[:] = xs[k]
-            _predict(xk, Pk, U[k], tn[k + 1] - tn[k], cfg, q, rows, xn, Pn, F, dr, qk, tmp)
-            rts_step_ws_nb(xk, Pk, xn, Pn, F, rows, xs[k + 1], Ps_next, rts_work)
-            xs[k] = xk
-            for i in range(nx):
-                var[k, i] = max(Pk[i, i], 1e-18)
-            cov_vxvy[k] = Pk[IVX, IVY]
-            Ps_next[:, :] = Pk
+    return xs, Ps, var, cov_vxvy, nis, counts
+
+
+@numba.njit(cache=True, nogil=True)
+def smoother_gains(k0, k1, xs, Ps, U, tn, cfg, q, rows, XN, PN, B):
+    """For nodes k0 <= k < k1: the prediction (``XN``, ``PN``) from the filtered node k to
+    k+1 and the transposed RTS gain ``B`` (:func:`sideslip.filters.kalman.rts_gain_ws_nb`),
+    stored at k - k0.  Depends on the forward pass only (runs beside the recursion)."""
+    nx = xs.shape[1]
+    Pk = np.zeros((nx, nx))
+    xk = np.zeros(nx)
+    F = np.zeros((nx, nx))
+    tmp = np.zeros((nx, nx))
+    L = np.zeros((nx, nx))
+    dr = np.zeros(nx)
+    qk = np.zeros(nx)
+    for k in range(k0, k1):
+        j = k - k0
+        unpack_upper_nb(Ps[k], Pk)
+        xk[:] = xs[k]
+        _predict(xk, Pk, U[k], tn[k + 1] - tn[k], cfg, q, rows, XN[j], PN[j], F, dr, qk, tmp)
+        rts_gain_ws_nb(Pk, PN[j], F, rows, B[j], L)
+
+
+@numba.njit(cache=True, nogil=True)
+def smoother_recursion(k0, k1, xs, Ps, XN, PN, B, Ps_next, var, cov_vxvy):
+    """The RTS recursion from node k1 - 1 down to k0 with the gains of :func:`smoother_gains`;
+    ``xs[k1]`` and ``Ps_next`` hold the smoothed node k1 on entry, node k0 on return.
+    Writes the smoothed states into ``xs``, their variances and the v_x-v_y covariance."""
+    nx = xs.shape[1]
+    Pk = np.zeros((nx, nx))
+    xk = np.zeros(nx)
+    T = np.zeros((nx, nx))
+    for k in range(k1 - 1, k0 - 1, -1):
+        j = k - k0
+        unpack_upper_nb(Ps[k], Pk)
+        xk[:] = xs[k]
+        rts_update_ws_nb(xk, Pk, XN[j], PN[j], B[j], xs[k + 1], Ps_next, T)
+        xs[k] = xk
+        for i in range(nx):
+            var[k, i] = max(Pk[i, i], 1e-18)
+        cov_vxvy[k] = Pk[IVX, IVY]
+        Ps_next[:, :] = Pk
+
+
+SMOOTHER_CHUNK = 2048  # nodes per block of gains (about 7 MB of float64 at 15 states)
+
+
+def run_nodes(
+    tn, U, vw, f_front, f_rear, delta, mu_floor, steady, g_node, g_age, g_e, g_n, g_pstd,
+    g_ve, g_vn, g_vstd, x0, P0, q, rows, axle, lever, cfg, smooth,
+):  # fmt: skip
+    """Forward EKF (:func:`forward_nodes`, same arguments) and, when ``smooth``, the RTS
+    smoother; returns ``(xs, var, cov_vxvy, nis, counts)``.
+
+    The smoother runs backwards in blocks of :data:`SMOOTHER_CHUNK` nodes: the gains of the
+    next (earlier) block are computed on a second thread while this block's recursion runs
+    (both compiled without the GIL); the arithmetic, and so the result, is the same as one
+    sequential pass."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    xs, Ps, var, cov_vxvy, nis, counts = forward_nodes(
+        tn, U, vw, f_front, f_rear, delta, mu_floor, steady, g_node, g_age, g_e, g_n, g_pstd,
+        g_ve, g_vn, g_vstd, x0, P0, q, rows, axle, lever, cfg, smooth,
+    )  # fmt: skip
+    N, nx = xs.shape
+    if not smooth or N < 2:
+        return xs, var, cov_vxvy, nis, counts
+    Ps_next = np.zeros((nx, nx))
+    unpack_upper_nb(Ps[N - 1], Ps_next)
+    bounds = [(max(k1 - SMOOTHER_CHUNK, 0), k1) for k1 in range(N - 1, 0, -SMOOTHER_CHUNK)]
+
+    def gains(block: tuple[int, int]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        k0, k1 = block
+        m = k1 - k0
+        XN, PN, B = np.empty((m, nx)), np.empty((m, nx, nx)), np.empty((m, nx, nx))
+        smoother_gains(k0, k1, xs, Ps, U, tn, cfg, q, rows, XN, PN, B)
+        return XN, PN, B
+
+    with ThreadPoolExecutor(max_workers=1) as pool:
+        pending = pool.submit(gains, bounds[0])
+        for i, (k0, k1) in enumerate(bounds):
+            XN, PN, B = pending.result()
+            if i + 1 < len(bounds):
+                pending = pool.submit(gains, bounds[i + 1])
+            smoother_recursion(k0, k1, xs, Ps, XN, PN, B, Ps_next, var, cov_vxvy)
     return xs, var, cov_vxvy, nis, counts
 
 
