@@ -109,6 +109,10 @@ class FusedSettings:
     lever_psd: float = 1e-5  # m/sqrt(s)
     wheel_sigma: float = 0.05  # m/s: noise and quantisation
     wheel_rel_sigma: float = 0.003  # fraction of the speed: wheel slip, rolling-radius changes
+    # normalised longitudinal slip stiffness C_k / F_z of the wheels that give the speed
+    # (Pacejka 2012, sec. 1.3: 15-20 for passenger-car tyres; the lower value, since the
+    # speed wheels carry only part of the load): the wheel speed's slip sigma is a_x / (g C_k)
+    wheel_slip_stiffness: float = 15.0
     gnss_vel_sigma: float = 0.1  # m/s, when the drive has no gnss_vel_std
     gnss_pos_sigma: float = 0.5  # m, white part, when the drive has no gnss_pos_std
     gnss_gm_sigma: float = 1.5  # m, correlated part of the position error per axis
@@ -362,6 +366,7 @@ def _config(nz: FusedSettings, k_phi: float, calibrate: bool, has_vel: bool) -> 
     cfg[eng.C_GNSS_RESET] = nz.gnss_reject_reset_s
     cfg[eng.C_AXLE_TAU] = nz.axle_error_tau_s
     cfg[eng.C_WHEEL_REL] = nz.wheel_rel_sigma
+    cfg[eng.C_WHEEL_SLIP_STIFFNESS] = nz.wheel_slip_stiffness
     if not calibrate and not has_vel:  # positions only, calibration not identified
         cfg[eng.C_POS_LEVER] = nz.lever_prior_sigma_m
         cfg[eng.C_POS_LATENCY] = nz.latency_prior_sigma_s

@@ -39,7 +39,8 @@ from sideslip.models.fused_measurements import (
     standstill_yaw_rate,
     wheel_speed,
 )
-from sideslip.models.fused_process import IMU, ISF, ISR, IVX, IVY, process_into
+from sideslip.models.fused_process import ICX, IMU, ISF, ISR, IVX, IVY, U_AX, process_into
+from sideslip.vehicle import G
 
 # indices of the loop's configuration vector (filled by sideslip.methods.fused)
 (
@@ -65,8 +66,9 @@ from sideslip.models.fused_process import IMU, ISF, ISR, IVX, IVY, process_into
     C_POS_LEVER,
     C_POS_LATENCY,
     C_WHEEL_REL,
-) = range(22)
-N_CFG = 22
+    C_WHEEL_SLIP_STIFFNESS,
+) = range(23)
+N_CFG = 23
 
 # innovation channels recorded per node (NIS, NaN where none)
 K_WHEEL, K_REAR, K_FRONT, K_GNSS_VEL, K_GNSS_POS = range(5)
@@ -176,8 +178,12 @@ def run_nodes(
             robust_scalar(x, P, -r, h, cfg[C_GYRO_NOISE] ** 2, 1e300, ph0)
         elif math.isfinite(vw[k]):
             hv = wheel_speed(x, h)
-            # wheel slip and rolling-radius changes are relative to the speed
-            sig_w = cfg[C_WHEEL_SIGMA] + cfg[C_WHEEL_REL] * abs(vw[k])
+            # wheel slip and rolling-radius changes are relative to the speed; driving and
+            # braking slip grows with the longitudinal force, slip ratio a_x / (g C_k) for a
+            # normalised longitudinal slip stiffness C_k (Pacejka 2012, sec. 1.3: C_Fk / F_z
+            # about 15-20; race lap: -3.5 % braking at 8 m/s^2, +6 % driving at 5 m/s^2)
+            a_long = abs(u[U_AX] - x[ICX])
+            sig_w = cfg[C_WHEEL_SIGMA] + abs(vw[k]) * (cfg[C_WHEEL_REL] + a_long / (G * cfg[C_WHEEL_SLIP_STIFFNESS]))
             d2, ok = robust_scalar(x, P, vw[k] - hv, h, sig_w * sig_w, gate, ph0)
             nis[k, K_WHEEL] = d2
         # the axle relations' error is a model error correlated over C_AXLE_TAU seconds, not
