@@ -455,9 +455,9 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     dof = np.where(np.isfinite(chan), dof_per, 0.0).sum(axis=1)
     nis_sum = np.where(np.isfinite(chan), chan, 0.0).sum(axis=1)
     cons = nis_consistency(tn, nis_sum, dof, window_s=nz.health_window_s, causal=not smooth)
-    need = [IE, IN, IPSI, IVX, IVY, IBG, ICY, ICX, ISG]
+    need = [IE, IN, IPSI, IVX, IVY, IBG, ICY, ICX, ISG, ISR]
     nodes: dict[Any, FloatArray] = {i: xs[:, i] for i in need}
-    nodes.update({("var", i): var[:, i] for i in (IE, IN, IPSI, IVX, IVY)})
+    nodes.update({("var", i): var[:, i] for i in (IE, IN, IPSI, IVX, IVY, ISR)})
     nodes.update(cvv=cov_vxvy, inflation=cons.inflation, health=cons.health)
     if stride == 1:
         rows = nodes
@@ -533,10 +533,18 @@ def _estimate(
     geom_v, _, _ = axle_geometry(vehicle)
     r_row = wz - rows[IBG]  # bias-corrected yaw rate, rad/s
     alpha_r = -(vy - geom_v[1] * r_row) / np.maximum(np.abs(vx), 1.0)
-    if not (has_pos or has_vel):
+    if not (has_pos or has_vel) or not smooth:
         # without GNSS nothing but the tyre relations pins v_y, and their error is correlated
-        # over whole corners: the rear slip angle carries the relation's relative error
+        # over whole corners: the rear slip angle carries the relation's relative error.  The
+        # causal filter is in that state in every corner: there the GNSS course rate is
+        # a_y / v whatever the gyro's scale, so GNSS tells slip from a gyro scale error only
+        # once the turn is complete, which the smoother sees and the filter has not yet
         var_b = var_b + (nz.force_rel * alpha_r) ** 2 + (nz.force_sigma / geom_v[3]) ** 2
+    # the rear slip scales with the learned stiffness: its remaining relative uncertainty
+    # is an error of the slip correlated over the whole drive, which the covariance's white
+    # updates do not carry (banked_turn, file 30 % soft: 2-sigma share 0.89 -> 0.9x)
+    rel_k = np.sqrt(np.maximum(rows[("var", ISR)], 0.0)) / np.maximum(rows[ISR], 0.2)
+    var_b = var_b + (rel_k * alpha_r) ** 2
     if t.size > 2:
         lag = nz.relaxation_m / np.maximum(np.abs(vx), 1.0) * np.abs(np.gradient(alpha_r, t))
         var_b = var_b + lag**2
