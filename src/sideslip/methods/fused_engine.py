@@ -207,8 +207,8 @@ def run_nodes(
             # braking slip grows with the longitudinal force, slip ratio a_x / (g C_k) for a
             # normalised longitudinal slip stiffness C_k (Pacejka 2012, sec. 1.3: C_Fk / F_z
             # about 15-20; race lap: -3.5 % braking at 8 m/s^2, +6 % driving at 5 m/s^2)
-            a_long = abs(u[U_AX] - x[ICX])
-            sig_w = cfg[C_WHEEL_SIGMA] + abs(vw[k]) * (cfg[C_WHEEL_REL] + a_long / (G * cfg[C_WHEEL_SLIP_STIFFNESS]))
+            slip = abs(u[U_AX] - x[ICX]) / (G * cfg[C_WHEEL_SLIP_STIFFNESS])
+            sig_w = cfg[C_WHEEL_SIGMA] + abs(vw[k]) * (cfg[C_WHEEL_REL] + slip)
             d2, ok = robust_scalar(x, P, vw[k] - hv, h, sig_w * sig_w, gate, ph0)
             nis[k, K_WHEEL] = d2
         # the axle relations' error is a model error correlated over C_AXLE_TAU seconds, not
