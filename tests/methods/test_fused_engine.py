@@ -44,9 +44,10 @@ def test_row_outputs_equal_the_numpy_formulas() -> None:
     infl = rng.uniform(1, 3, n)
     bg, cy, cx, sg = rng.normal(0, 0.01, n), rng.normal(0, 0.5, n), rng.normal(0, 0.3, n), rng.normal(0, 0.01, n)
     wz, wy, fy = rng.normal(0, 0.3, n), rng.normal(0, 0.05, n), rng.normal(0, 3, n)
+    s_r, var_sr = rng.uniform(0.1, 1.5, n), rng.uniform(0, 0.05, n)
     k_phi, l_r, rel, floor, relax = 0.005, 1.4, 0.2, 0.01, 1.0
     beta, beta_std, r, roll, bank, pitch = eng.row_outputs(
-        t, vx, vy, var_vx, var_vy, cvv, infl, bg, cy, cx, sg, wz, wy, fy,
+        t, vx, vy, var_vx, var_vy, cvv, infl, bg, cy, cx, sg, s_r, var_sr, wz, wy, fy,
         k_phi, l_r, True, rel, floor, relax, math.radians(30.0), math.radians(5.0),
     )  # fmt: skip
     moving = np.abs(vx) > 0.5
@@ -55,6 +56,7 @@ def test_row_outputs_equal_the_numpy_formulas() -> None:
     vb = (jx**2 * var_vx + jy**2 * var_vy + 2 * jx * jy * cvv) * infl
     alpha = -(vy - l_r * (wz - bg)) / np.maximum(np.abs(vx), 1.0)
     vb += (rel * alpha) ** 2 + floor**2
+    vb += (np.sqrt(var_sr) / np.maximum(s_r, 0.2) * alpha) ** 2
     vb += (relax / np.maximum(np.abs(vx), 1.0) * np.abs(np.gradient(alpha, t))) ** 2
     std_ref = np.where(moving, np.minimum(np.sqrt(vb), math.radians(30.0)), math.radians(5.0))
     np.testing.assert_allclose(beta, np.where(moving, np.arctan2(vy, np.abs(vx)), 0.0), rtol=1e-12)
