@@ -271,17 +271,23 @@ def _window_mean(v: FloatArray, idx: NDArray[np.intp]) -> FloatArray:
     return np.where(c > 0, s / np.maximum(c, 1), np.nan)
 
 
-def _gnss(drive: Drive, nz: FusedSettings) -> dict[str, FloatArray]:
-    """The GNSS samples of the drive from the GNSS layer (:mod:`sideslip.gnss`) as per-row
-    columns, NaN where none: ``gnss_e/n`` with their 1-sigma ``pstd`` (the white part of the
-    error, at least 0.2 m: the Gauss-Markov states carry the slow part) and the Doppler
-    ``gnss_ve/vn`` with ``vstd`` (at least 0.02 m/s)."""
-    n = len(drive)
-    out = {k: np.full(n, np.nan) for k in ("gnss_e", "gnss_n", "pstd", "gnss_ve", "gnss_vn", "vstd")}
+def _gnss(drive: Drive, nz: FusedSettings) -> dict[str, Any]:
+    """The GNSS samples of the drive from the GNSS layer (:mod:`sideslip.gnss`): ``rows``, the
+    rows with a fix and/or a Doppler velocity, and at those rows ``gnss_e/n`` with their
+    1-sigma ``pstd`` (the white part of the error, at least 0.2 m: the Gauss-Markov states
+    carry the slow part) and ``gnss_ve/vn`` with ``vstd`` (at least 0.02 m/s), NaN where the
+    epoch lacks that measurement; ``has_pos`` / ``has_vel``."""
     pos = gnss.position_samples(drive, nz.gnss_pos_sigma, 0.2)
-    out["gnss_e"][pos.rows], out["gnss_n"][pos.rows], out["pstd"][pos.rows] = pos.e, pos.n, pos.sigma
     vel = gnss.doppler_samples(drive, nz.gnss_vel_sigma, 0.02)
-    out["gnss_ve"][vel.rows], out["gnss_vn"][vel.rows], out["vstd"][vel.rows] = vel.ve, vel.vn, vel.sigma
+    rows = np.union1d(pos.rows, vel.rows)
+    out: dict[str, Any] = {"rows": rows, "has_pos": pos.rows.size > 0, "has_vel": vel.rows.size > 0}
+    for names, smp in ((("gnss_e", "gnss_n", "pstd"), (pos.e, pos.n, pos.sigma)),
+                       (("gnss_ve", "gnss_vn", "vstd"), (vel.ve, vel.vn, vel.sigma))):  # fmt: skip
+        at = np.searchsorted(rows, pos.rows if names[0] == "gnss_e" else vel.rows)
+        for name, values in zip(names, smp, strict=True):
+            col = np.full(rows.size, np.nan)
+            col[at] = values
+            out[name] = col
     return out
 
 
@@ -391,8 +397,7 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     # only is taken as driving forwards (GNSS then disagrees, and the Huber weights limit harm)
     vw = np.full(n, np.nan) if raw is None else raw
     gn = _gnss(drive, nz)
-    has_pos = bool(np.isfinite(gn["gnss_e"]).any() and np.isfinite(gn["gnss_n"]).any())
-    has_vel = bool(np.isfinite(gn["gnss_ve"]).any() and np.isfinite(gn["gnss_vn"]).any())
+    has_pos, has_vel = bool(gn["has_pos"]), bool(gn["has_vel"])
     # latency and lever arm: identified on positions-only drives; with Doppler the file's
     # lever arm is used (in steady turns r dl_x is indistinguishable from v_y)
     calibrate = has_pos and not has_vel and nz.identify_gnss_calibration
@@ -421,10 +426,7 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     # nodes: every stride-th row, every GNSS epoch (so that fixes and Doppler velocities are
     # applied at their own time) and, for the smoother, the last row
     stride = max(1, round(nz.step_s / drive.dt_median)) if nz.step_s > 0 and n > 1 else 1
-    g_rows = np.flatnonzero(
-        (np.isfinite(gn["gnss_e"]) & np.isfinite(gn["gnss_n"]))
-        | (np.isfinite(gn["gnss_ve"]) & np.isfinite(gn["gnss_vn"]))
-    )
+    g_rows = gn["rows"]
     idx = np.arange(0, n, stride)
     if stride > 1:
         idx = np.union1d(np.append(idx, [n - 1]) if smooth else idx, g_rows)
@@ -440,10 +442,12 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     lever = np.array(vehicle.gnss_xyz, dtype=float)
     xs, var, cov_vxvy, nis, counts = eng.run_nodes(
         tn, U, vw_n, f_front[idx], f_rear[idx], delta[idx], mu_floor[idx], steady[idx],
-        g_node, g_age, gn["gnss_e"][g_rows], gn["gnss_n"][g_rows], gn["pstd"][g_rows],
-        gn["gnss_ve"][g_rows], gn["gnss_vn"][g_rows], gn["vstd"][g_rows],
-        x0, P0, q, f_rows(nx), geom, lever, _config(nz, k_phi, calibrate, has_vel), smooth,
+        g_node, g_age, gn["gnss_e"], gn["gnss_n"], gn["pstd"], gn["gnss_ve"], gn["gnss_vn"],
+        gn["vstd"], x0, P0, q, f_rows(nx), geom, lever, _config(nz, k_phi, calibrate, has_vel),
+        smooth,
     )  # fmt: skip
+    # the per-row node inputs are no longer needed: free them before the row outputs
+    del f_front, f_rear, delta, mu_floor, steady, jerk, r_dot, r_dot_lp, vw, raw, wx, U, gn
     # consistency between cues: windowed NIS of the axle and GNSS innovations
     chan = nis[:, [eng.K_REAR, eng.K_FRONT, eng.K_GNSS_VEL, eng.K_GNSS_POS]]
     dof_per = np.array([1.0, 1.0, 2.0, 2.0])
@@ -460,10 +464,34 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
         rows = _interpolate(t, tn, nodes)
     else:  # causal: the last node, propagated to the row with the row's IMU sample
         rows = _propagate_causal(t, tn, idx, nodes, wz, wy, ax, ay, fy_lp, k_phi)
-    return _estimate(
+    est = _estimate(
         drive, vehicle, smooth, nz, rows, xs, var, cons, tn, counts,
         k_phi, fy_lp, wz, wy, has_pos, has_vel, use_front, notes,
     )  # fmt: skip
+    return Estimate(est.method, est.t, est.series, est.params, _innovations(n, idx, nis))
+
+
+INNOVATION_CHANNELS = (
+    ("wheel_speed_nis", eng.K_WHEEL),
+    ("rear_axle_nis", eng.K_REAR),
+    ("front_axle_nis", eng.K_FRONT),
+    ("gnss_velocity_nis", eng.K_GNSS_VEL),
+    ("gnss_position_nis", eng.K_GNSS_POS),
+)
+
+
+def _innovations(n: int, idx: NDArray[np.intp], nis: FloatArray) -> dict[str, NDArray[np.float32]]:
+    """The NIS of each cue the run used (before robust down-weighting; chi^2 with 1 dof for
+    the wheel speed and the axle relations, 2 for GNSS velocity and position; summed where a
+    node took several GNSS epochs) at its node's row, NaN on other rows; float32 (diagnostics
+    kept in memory, not written to the output table)."""
+    out: dict[str, NDArray[np.float32]] = {}
+    for name, k in INNOVATION_CHANNELS:
+        if np.isfinite(nis[:, k]).any():
+            col = np.full(n, np.nan, dtype=np.float32)
+            col[idx] = nis[:, k]
+            out[name] = col
+    return out
 
 
 def _interpolate(t: FloatArray, tn: FloatArray, nodes: dict[Any, FloatArray]) -> dict[Any, FloatArray]:
