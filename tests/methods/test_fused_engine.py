@@ -7,7 +7,8 @@ import math
 import numpy as np
 
 from sideslip.methods import fused_engine as eng
-from sideslip.methods.fused import _interpolate
+from sideslip.methods.fused import AUX_KEYS, _node_weights
+from sideslip.models.fused_process import ICX, ICY, ISG, ISR, IVX, IVY
 from sideslip.vehicle import G
 
 
@@ -26,9 +27,10 @@ def test_node_interpolation_equals_np_interp_including_the_ends() -> None:
     tn = np.cumsum(rng.uniform(0.01, 0.1, 50))
     t = np.linspace(tn[0] - 0.2, tn[-1] + 0.2, 997)  # rows before the first and after the last node
     nodes = {"a": rng.normal(size=50), ("var", 3): rng.uniform(size=50)}
-    rows = _interpolate(t, tn, nodes)
-    for k, v in nodes.items():
-        np.testing.assert_allclose(rows[k], np.interp(t, tn, v), rtol=1e-12, atol=1e-14)
+    j, w = _node_weights(t, tn)
+    rows = eng.interp_rows(j, w, np.stack(list(nodes.values())))
+    for row, v in zip(rows, nodes.values(), strict=True):
+        np.testing.assert_allclose(row, np.interp(t, tn, v), rtol=1e-12, atol=1e-14)
 
 
 def test_row_outputs_equal_the_numpy_formulas() -> None:
@@ -46,8 +48,12 @@ def test_row_outputs_equal_the_numpy_formulas() -> None:
     wz, wy, fy = rng.normal(0, 0.3, n), rng.normal(0, 0.05, n), rng.normal(0, 3, n)
     s_r, var_sr = rng.uniform(0.1, 1.5, n), rng.uniform(0, 0.05, n)
     k_phi, l_r, rel, floor, relax = 0.005, 1.4, 0.2, 0.01, 1.0
+    # every row its own node (j = i, w = 0): the state terms enter as they are
+    aux = {("var", IVX): var_vx, ("var", IVY): var_vy, "cvv": cvv, "inflation": infl, ICY: cy,
+           ICX: cx, ISG: sg, ISR: s_r, ("var", ISR): var_sr}  # fmt: skip
+    nodes = np.stack([aux[k] for k in AUX_KEYS])
     beta, beta_std, r, roll, bank, pitch = eng.row_outputs(
-        t, vx, vy, var_vx, var_vy, cvv, infl, bg, cy, cx, sg, s_r, var_sr, wz, wy, fy,
+        t, vx, vy, bg, wz, wy, fy, np.arange(n), np.zeros(n), nodes,
         k_phi, l_r, True, rel, floor, relax, math.radians(30.0), math.radians(5.0),
     )  # fmt: skip
     moving = np.abs(vx) > 0.5

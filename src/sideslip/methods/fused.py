@@ -440,32 +440,39 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     x0, P0 = _initial_state(drive, vw, nx, nz)
     q = _process_psd(nx, nz)
     lever = np.array(vehicle.gnss_xyz, dtype=float)
+    node_inputs = (f_front[idx], f_rear[idx], delta[idx], mu_floor[idx], steady[idx])
+    # the per-row node inputs are no longer needed: free them before the filter runs
+    del f_front, f_rear, delta, mu_floor, steady, jerk, r_dot, r_dot_lp, vw, raw, wx
     xs, var, cov_vxvy, nis, counts = eng.run_nodes(
-        tn, U, vw_n, f_front[idx], f_rear[idx], delta[idx], mu_floor[idx], steady[idx],
-        g_node, g_age, gn["gnss_e"], gn["gnss_n"], gn["pstd"], gn["gnss_ve"], gn["gnss_vn"],
-        gn["vstd"], x0, P0, q, f_rows(nx), geom, lever, _config(nz, k_phi, calibrate, has_vel),
-        smooth,
+        tn, U, vw_n, *node_inputs, g_node, g_age, gn["gnss_e"], gn["gnss_n"], gn["pstd"],
+        gn["gnss_ve"], gn["gnss_vn"], gn["vstd"], x0, P0, q, f_rows(nx), geom, lever,
+        _config(nz, k_phi, calibrate, has_vel), smooth,
     )  # fmt: skip
-    # the per-row node inputs are no longer needed: free them before the row outputs
-    del f_front, f_rear, delta, mu_floor, steady, jerk, r_dot, r_dot_lp, vw, raw, wx, U, gn
+    del U, gn, node_inputs
     # consistency between cues: windowed NIS of the axle and GNSS innovations
     chan = nis[:, [eng.K_REAR, eng.K_FRONT, eng.K_GNSS_VEL, eng.K_GNSS_POS]]
     dof_per = np.array([1.0, 1.0, 2.0, 2.0])
     dof = np.where(np.isfinite(chan), dof_per, 0.0).sum(axis=1)
     nis_sum = np.where(np.isfinite(chan), chan, 0.0).sum(axis=1)
     cons = nis_consistency(tn, nis_sum, dof, window_s=nz.health_window_s, causal=not smooth)
-    need = [IE, IN, IPSI, IVX, IVY, IBG, ICY, ICX, ISG, ISR]
-    nodes: dict[Any, FloatArray] = {i: xs[:, i] for i in need}
-    nodes.update({("var", i): var[:, i] for i in (IE, IN, IPSI, IVX, IVY, ISR)})
-    nodes.update(cvv=cov_vxvy, inflation=cons.inflation, health=cons.health)
-    if stride == 1:
-        rows = nodes
-    elif smooth:  # linear interpolation of the smoothed nodes
-        rows = _interpolate(t, tn, nodes)
+    # series output on every row; the others (AUX_KEYS) enter the row outputs from the nodes
+    nodes: dict[Any, FloatArray] = {i: xs[:, i] for i in (IE, IN, IPSI, IVX, IVY, IBG)}
+    # 1-sigma of yaw and position at the nodes, interpolated as such (no per-row variances)
+    nodes.update({("std", i): np.sqrt(np.maximum(var[:, i], 0.0)) for i in (IE, IN, IPSI)})
+    nodes.update(health=cons.health)
+    aux = {i: xs[:, i] for i in (ICY, ICX, ISG, ISR)}
+    aux.update({("var", i): var[:, i] for i in (IVX, IVY, ISR)})
+    aux.update(cvv=cov_vxvy, inflation=cons.inflation)
+    aux_nodes = np.stack([aux[k] for k in AUX_KEYS])
+    if smooth:  # linear interpolation of the smoothed nodes
+        j, w = _node_weights(t, tn)
+        rows = dict(zip(nodes, eng.interp_rows(j, w, np.stack(list(nodes.values()))), strict=True))
     else:  # causal: the last node, propagated to the row with the row's IMU sample
-        rows = _propagate_causal(t, tn, idx, nodes, wz, wy, ax, ay, fy_lp, k_phi)
+        j = np.maximum(np.searchsorted(idx, np.arange(n), side="right") - 1, 0)
+        w = np.zeros(n)
+        rows = _propagate_causal(t, tn, j, nodes, aux, wz, wy, ax, ay, fy_lp, k_phi)
     est = _estimate(
-        drive, vehicle, smooth, nz, rows, xs, var, cons, tn, counts,
+        drive, vehicle, smooth, nz, rows, (j, w, aux_nodes), xs, var, cons, tn, counts,
         k_phi, fy_lp, wz, wy, has_pos, has_vel, use_front, notes,
     )  # fmt: skip
     return Estimate(est.method, est.t, est.series, est.params, _innovations(n, idx, nis))
@@ -494,23 +501,27 @@ def _innovations(n: int, idx: NDArray[np.intp], nis: FloatArray) -> dict[str, ND
     return out
 
 
-def _interpolate(t: FloatArray, tn: FloatArray, nodes: dict[Any, FloatArray]) -> dict[Any, FloatArray]:
-    """Every node series linearly interpolated to the rows (as ``np.interp``: held beyond the
-    first and last node), in one compiled pass over the rows."""
+# node series the row outputs read at node level (interpolated inside eng.row_outputs)
+AUX_KEYS: tuple[Any, ...] = (("var", IVX), ("var", IVY), "cvv", "inflation", ICY, ICX, ISG, ISR, ("var", ISR))
+
+
+def _node_weights(t: FloatArray, tn: FloatArray) -> tuple[NDArray[np.intp], FloatArray]:
+    """Row i between nodes ``j[i]`` and ``j[i] + 1`` at fraction ``w[i]`` (as ``np.interp``:
+    held before the first and after the last node)."""
     j = np.clip(np.searchsorted(tn, t, side="right") - 1, 0, max(tn.size - 2, 0))
     if tn.size > 1:
         w = np.clip((t - tn[j]) / (tn[j + 1] - tn[j]), 0.0, 1.0)
     else:
         w = np.zeros(t.size)
-    out = eng.interp_rows(j, w, np.stack(list(nodes.values())))
-    return dict(zip(nodes, out, strict=True))
+    return j, w
 
 
 def _propagate_causal(
     t: FloatArray,
     tn: FloatArray,
-    idx: NDArray[np.intp],
+    j: NDArray[np.intp],
     nodes: dict[Any, FloatArray],
+    aux: dict[Any, FloatArray],
     wz: FloatArray,
     wy: FloatArray,
     ax: FloatArray,
@@ -520,19 +531,20 @@ def _propagate_causal(
 ) -> dict[Any, FloatArray]:
     """Filter output on every row from the latest node at or before it: one Euler step of
     the process model over the (< one node step) gap with the row's own IMU sample."""
-    j = np.maximum(np.searchsorted(idx, np.arange(t.size), side="right") - 1, 0)
     rows = {k: v[j] for k, v in nodes.items()}
     dt = t - tn[j]
-    roll = np.arcsin(np.clip(rows[ICY] / G, -0.6, 0.6)) + k_phi * fy_lp
-    pitch = np.arcsin(np.clip(-rows[ICX] / G, -0.6, 0.6))
-    r = ((wz - rows[IBG]) * (1.0 - rows[ISG]) * np.cos(roll) + wy * np.sin(roll)) / np.cos(pitch)
+    c_y, c_x = aux[ICY][j], aux[ICX][j]
+    roll = np.arcsin(np.clip(c_y / G, -0.6, 0.6)) + k_phi * fy_lp
+    pitch = np.arcsin(np.clip(-c_x / G, -0.6, 0.6))
+    r = ((wz - rows[IBG]) * (1.0 - aux[ISG][j]) * np.cos(roll) + wy * np.sin(roll)) / np.cos(pitch)
+    del roll, pitch
     vx, vy, psi = rows[IVX], rows[IVY], rows[IPSI]
     c, s = np.cos(psi), np.sin(psi)
     rows[IE] = rows[IE] + dt * (vx * c - vy * s)
     rows[IN] = rows[IN] + dt * (vx * s + vy * c)
     rows[IPSI] = psi + dt * r
-    rows[IVX] = vx + dt * (ax - rows[ICX] + r * vy)
-    rows[IVY] = vy + dt * (ay * (1.0 - G * k_phi) - rows[ICY] - r * vx)
+    rows[IVX] = vx + dt * (ax - c_x + r * vy)
+    rows[IVY] = vy + dt * (ay * (1.0 - G * k_phi) - c_y - r * vx)
     return rows
 
 
@@ -542,6 +554,7 @@ def _estimate(
     smooth: bool,
     nz: FusedSettings,
     rows: dict[Any, FloatArray],
+    aux: tuple[NDArray[np.intp], FloatArray, FloatArray],
     xs: FloatArray,
     var: FloatArray,
     cons: Any,
@@ -556,7 +569,9 @@ def _estimate(
     use_front: bool,
     notes: dict[str, str],
 ) -> Estimate:
-    """Output series (from the per-row ``rows``) and params (from the nodes) of :func:`fuse`."""
+    """Output series (from the per-row ``rows`` and, through ``aux = (j, w, node values of
+    AUX_KEYS)``, the node-level terms of beta_std and the attitude) and params (from the
+    nodes) of :func:`fuse`."""
     t = drive.t
     vx, vy = rows[IVX], rows[IVY]
     geom_v, _, _ = axle_geometry(vehicle)
@@ -569,17 +584,17 @@ def _estimate(
     # uncertainty is an error of the slip correlated over the whole drive, which the
     # covariance's white updates do not carry (banked_turn, file 30 % soft: 2-sigma share
     # 0.89 -> 0.9x)
+    j, w, aux_nodes = aux
     beta, beta_std, r, roll, bank, pitch = eng.row_outputs(
-        t, vx, vy, rows[("var", IVX)], rows[("var", IVY)], rows["cvv"], rows["inflation"],
-        rows[IBG], rows[ICY], rows[ICX], rows[ISG], rows[ISR], rows[("var", ISR)], wz, wy,
-        fy_lp, k_phi, geom_v[1], not (has_pos or has_vel) or not smooth, nz.force_rel,
-        nz.force_sigma / geom_v[3], nz.relaxation_m, math.radians(30.0), math.radians(5.0),
+        t, vx, vy, rows[IBG], wz, wy, fy_lp, j, w, aux_nodes, k_phi, geom_v[1],
+        not (has_pos or has_vel) or not smooth, nz.force_rel, nz.force_sigma / geom_v[3],
+        nz.relaxation_m, math.radians(30.0), math.radians(5.0),
     )  # fmt: skip
     series = {
         "beta": beta, "beta_std": beta_std, "health": rows["health"], "r": r, "vx": vx,
         "vy": vy, "gyro_bias": rows[IBG], "roll": roll, "bank": bank, "pitch": pitch,
     }  # fmt: skip
-    std = {i: np.sqrt(np.maximum(rows[("var", i)], 0.0)) for i in (IE, IN, IPSI)}
+    std = {i: rows[("std", i)] for i in (IE, IN, IPSI)}
     if has_pos or has_vel:  # without GNSS, heading and position are not observable
         series.update(yaw=rows[IPSI], yaw_std=std[IPSI])
     if has_pos:

@@ -420,21 +420,27 @@ def interp_rows(j, w, V):
 
 @numba.njit(cache=True)
 def row_outputs(
-    t, vx, vy, var_vx, var_vy, cov_vxvy, inflation, bias_g, c_y, c_x, s_g, s_r, var_sr, wz, wy,
-    fy_lp, k_phi, l_r, use_tyre, tyre_rel, tyre_floor, relaxation_m, std_moving_max, std_still,
+    t, vx, vy, bias_g, wz, wy, fy_lp, j, w, aux, k_phi, l_r, use_tyre, tyre_rel, tyre_floor,
+    relaxation_m, std_moving_max, std_still,
 ):  # fmt: skip
     """Per-row outputs of the fused estimator in one pass (see ``sideslip.methods.fused``):
     ``(beta, beta_std, r, roll, bank, pitch)``, rad and rad/s.
 
+    ``vx``, ``vy``, ``bias_g`` are per row; the other state terms are node series ``aux``
+    (rows in the order of ``sideslip.methods.fused.AUX_KEYS``: var v_x, var v_y, cov v_x v_y,
+    the consistency inflation, c_y, c_x, s_g, s_r, var s_r), read at row i between nodes
+    ``j[i]`` and ``j[i] + 1`` at fraction ``w[i]`` (0: the node itself).
+
     beta = atan2(v_y, |v_x|) where |v_x| > 0.5 m/s (0 otherwise); its variance from the
-    gradient of atan2 and the (v_x, v_y) covariance, times the consistency ``inflation``, plus
+    gradient of atan2 and the (v_x, v_y) covariance, times the consistency inflation, plus
     (``use_tyre``) the tyre relation's error on the rear slip angle
     ``(tyre_rel alpha_r)^2 + tyre_floor^2``, the learned rear stiffness's relative uncertainty
     on it ``(sqrt(var_sr) / max(s_r, 0.2) alpha_r)^2`` and the tyre-relaxation lag
     ``relaxation_m / v_x |d alpha_r / dt|`` (d/dt as ``np.gradient``: second order inside,
-    first at the ends).
-    Roll = bank (from c_y) + k_phi * f_y; r the Euler yaw rate through roll and pitch."""
+    first at the ends).  Roll = bank (from c_y) + k_phi * f_y; r the Euler yaw rate through
+    roll and pitch."""
     n = t.size
+    N = aux.shape[1]
     beta = np.empty(n)
     beta_std = np.empty(n)
     r = np.empty(n)
@@ -442,16 +448,24 @@ def row_outputs(
     bank = np.empty(n)
     pitch = np.empty(n)
     alpha = np.empty(n)
+    a = np.empty(aux.shape[0])
     for i in range(n):
         alpha[i] = -(vy[i] - l_r * (wz[i] - bias_g[i])) / max(abs(vx[i]), 1.0)
     for i in range(n):
+        j0 = j[i]
+        j1 = min(j0 + 1, N - 1)
+        for c in range(a.size):
+            a[c] = aux[c, j0] + w[i] * (aux[c, j1] - aux[c, j0])
+        var_vx, var_vy, cov_vxvy, inflation, c_y, c_x, s_g, s_r, var_sr = (
+            a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7], a[8]
+        )
         s2 = max(vx[i] * vx[i] + vy[i] * vy[i], 1e-6)
         jx = -vy[i] / s2
         jy = vx[i] / s2
-        vb = (jx * jx * var_vx[i] + jy * jy * var_vy[i] + 2.0 * jx * jy * cov_vxvy[i]) * inflation[i]
+        vb = (jx * jx * var_vx + jy * jy * var_vy + 2.0 * jx * jy * cov_vxvy) * inflation
         if use_tyre:
             vb += (tyre_rel * alpha[i]) ** 2 + tyre_floor**2
-        rel_k = math.sqrt(max(var_sr[i], 0.0)) / max(s_r[i], 0.2)
+        rel_k = math.sqrt(max(var_sr, 0.0)) / max(s_r, 0.2)
         vb += (rel_k * alpha[i]) ** 2
         if n > 2:
             if i == 0:
@@ -472,11 +486,11 @@ def row_outputs(
         else:
             beta[i] = 0.0
             beta_std[i] = min(std_still, std_moving_max)
-        bk = math.asin(min(max(c_y[i] / G, -0.6), 0.6))
+        bk = math.asin(min(max(c_y / G, -0.6), 0.6))
         rl = bk + k_phi * fy_lp[i]
-        pt = math.asin(min(max(-c_x[i] / G, -0.6), 0.6))
+        pt = math.asin(min(max(-c_x / G, -0.6), 0.6))
         bank[i] = bk
         roll[i] = rl
         pitch[i] = pt
-        r[i] = ((wz[i] - bias_g[i]) * (1.0 - s_g[i]) * math.cos(rl) + wy[i] * math.sin(rl)) / math.cos(pt)
+        r[i] = ((wz[i] - bias_g[i]) * (1.0 - s_g) * math.cos(rl) + wy[i] * math.sin(rl)) / math.cos(pt)
     return beta, beta_std, r, roll, bank, pitch
