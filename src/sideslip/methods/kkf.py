@@ -17,8 +17,8 @@ mean above it, or speed below the gate, or no recent course -- leaves it at once
 
 Noise (:class:`KkfSettings`): ``preset="auto"`` (default) takes the gyro white noise from the
 drive (:func:`sideslip.signals.white_noise_sigma_100hz`), ``"typical"`` the fixed 0.3 deg/s at
-100 Hz of seed 001 Table I; the course noise is the receiver's (GNSS layer).  Seed 001 gives no
-further noise values, so there is no "paper" preset.
+100 Hz of seed 001 Table I (``"paper"`` is the same, by the paper's name); the course noise is
+the receiver's (GNSS layer).  Seed 001 gives no further noise values.
 
 Honest uncertainty: the KKF's beta error in a turn is the heading error integrated from the gyro
 (scale factor times the heading change since the last straight, plus bias drift), which the
@@ -99,7 +99,8 @@ BIAS_KNOWN_VAR = (0.01 / 3.0) ** 2
 class KkfSettings:
     """Noise and options of the KKF.
 
-    preset : "auto" (gyro noise from the drive) or "typical" (module docstring).
+    preset : "auto" (gyro noise from the drive), "paper" (seed 001 Table I gyro noise) or
+        "typical" (= "paper"); module docstring.
     gyro_sigma_100hz_rad_s : rad/s per gyro sample at 100 Hz; None = from the preset.
     gyro_bias_psd_rad2_s3 : (rad/s)^2/s, bias random-walk density.
     gyro_scale_rel_sigma : 1-sigma of the gyro scale factor (measured/true - 1) behind the
@@ -111,7 +112,7 @@ class KkfSettings:
     consistency_window_s : s, window of the NIS test of the course updates (0: off).
     """
 
-    preset: Literal["auto", "typical"] = "auto"
+    preset: Literal["auto", "paper", "typical"] = "auto"
     gyro_sigma_100hz_rad_s: float | None = None
     gyro_bias_psd_rad2_s3: float = Q_BIAS
     gyro_scale_rel_sigma: float = 0.01
@@ -123,8 +124,10 @@ class KkfSettings:
     consistency_window_s: float = 10.0
 
     def __post_init__(self) -> None:
-        if self.preset not in ("auto", "typical"):
-            raise ValueError(f"KkfSettings.preset = {self.preset!r}: expected 'auto' or 'typical'")
+        if self.preset not in ("auto", "paper", "typical"):
+            raise ValueError(
+                f"KkfSettings.preset = {self.preset!r}: expected 'auto', 'paper' or 'typical'"
+            )
         g = self.gyro_sigma_100hz_rad_s
         if g is not None and not (math.isfinite(g) and g > 0):
             raise ValueError(f"KkfSettings.gyro_sigma_100hz_rad_s = {g}: expected a number > 0")
