@@ -9,18 +9,19 @@ measures what the density drives:
 
 1. ``steer_yaw_factor`` on the steering-input and yaw-moment densities, by the gyro channel:
    the gyro measures r (+ bias) at every IMU row, so its one-step prediction errors are the
-   direct cue of the yaw-rate process noise.  Grid :data:`STEER_YAW_GRID`, sideslip factor 1.
+   direct cue of the yaw-rate process noise.  Grid :data:`STEER_YAW_GRID`, each scored by its
+   best gyro likelihood over the sideslip grid (the two states are coupled).
 2. ``beta_factor`` on the sideslip density, by the GNSS course channel (nu = psi + beta):
    the independent cue of the model's sideslip.  Grid :data:`BETA_GRID` at the chosen
-   factor 1.  Model error is not white (it grows as the tyres leave their linear range), so a
+   steering/yaw factor.  Model error is not white (it grows as the tyres leave their linear range), so a
    single likelihood maximum can be too confident: among the factors whose likelihood the
    drive does not reject against the best one (likelihood-ratio test, Wilks 1938:
    Delta(-2 ln L) <= :data:`LR_CHI2_95`, chi2 1 dof at 95 %) the largest is taken -- the most
    cautious sideslip noise the drive is consistent with.
 
 -2 ln L = sum over updates of ln S + nu^2 / S (constants dropped).  Cost: one filter pass per
-grid point (|STEER_YAW_GRID| + |BETA_GRID| - 1 = 6 passes of the numba loop, the discretised
-model table shared, Q_d being linear in Q_c), linear in the drive's length.  The grids stop at
+grid point (|STEER_YAW_GRID| x |BETA_GRID| = 12 passes of the numba loop, the discretised model
+table shared, Q_d being linear in Q_c), linear in the drive's length.  The grids stop at
 the largest factors checked on the simulator (a sideslip density beyond 30x typical let the
 filter chase the course noise: beta_std no longer covered the error on the race lap).
 """
@@ -95,11 +96,16 @@ def choose_noise(
     fs_scores: dict[str, float] = {}
     fs, n_g = 1.0, 0
     if tune_steer_yaw:
+        # the sideslip density also shapes the yaw-rate prediction (the states are coupled
+        # through A), so the gyro score of each steering/yaw factor is its best over BETA_GRID
         best = np.inf
         for f in STEER_YAW_GRID:
-            res = result(f, 1.0)
-            score, n_g = neg2_log_likelihood(res.gyro_innov, res.gyro_s)
-            fs_scores[f"{f:g}"] = score
+            score = np.inf
+            for fb_try in BETA_GRID if tune_beta else (1.0,):
+                res = result(f, fb_try)
+                s_try, n_g = neg2_log_likelihood(res.gyro_innov, res.gyro_s)
+                score = min(score, s_try)
+            fs_scores[f"{f:g}"] = float(score)
             if n_g and score < best:
                 best, fs = score, f
     fb_scores: dict[str, float] = {}
