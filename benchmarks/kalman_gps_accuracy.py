@@ -3,6 +3,9 @@
 Run:  .venv/bin/python benchmarks/kalman_gps_accuracy.py [--quick]
 Writes benchmarks/results/kalman_gps_accuracy.md.
 
+* Process noise identified from the drive (issue 14): mkf / mkf_adaptive with the densities
+  before issue 14, the paper preset and the default, on every simulated scenario of the method
+  comparison, both vehicle files: beta RMSE, 2-sigma share, chosen factors, cost.
 * Accuracy: beta RMSE / max error (deg, above the evaluation speed gate, from
   ``sideslip.evaluate.metrics``) of the three methods on the paper's two scenarios (several
   seeds; the right vehicle file and one with cornering stiffness 30 % low) and on other
@@ -240,8 +243,8 @@ def main() -> None:
         f"Seeds {list(seeds)} for {', '.join(PAPER_SCENARIOS)}; seed 0 for the others.",
         "Errors above the evaluation speed gate (sideslip.evaluate.metrics). Residual colour: sum of the",
         "squared autocorrelations of the normalised innovations over 20 lags (~0.004 for white noise at",
-        "5000 samples); NIS: mean squared normalised innovation (1 = consistent; the default gyro noise,",
-        "0.3 deg/s, is above the simulator's, hence NIS << 1 on the gyro channel).",
+        "5000 samples); NIS: mean squared normalised innovation (1 = consistent).  Default settings",
+        "(`preset=\"auto\"`: gyro noise and process noise identified from each drive).",
         "",
         "## Beta accuracy, the paper's scenarios",
         "",
