@@ -180,6 +180,39 @@ def noise_lines(scenarios: tuple[str, ...] = NOISE_SCENARIOS) -> list[str]:
     return lines
 
 
+KKF_BIAS_FACTORS = (0.1, 1.0, 10.0, 100.0, 1000.0)
+
+
+def kkf_bias_lines(scenarios: tuple[str, ...] = NOISE_SCENARIOS) -> list[str]:
+    """The KKF's one process density (gyro-bias walk) scored by its course-innovation
+    likelihood on each drive, against the beta RMSE it gives: would the likelihood pick it?"""
+    from sideslip.methods.mkf_tuning import neg2_log_likelihood
+
+    head = " | ".join(f"-2lnL / RMSE x{f:g}" for f in KKF_BIAS_FACTORS)
+    lines = [f"| scenario | {head} | RMSE at ML pick | RMSE fixed (x1) |",
+             "|---|" + "---|" * (len(KKF_BIAS_FACTORS) + 2)]
+    picked, fixed = [], []
+    for sc in scenarios:
+        d = simulate(sc, seed=0)
+        veh = load_vehicle(d.meta["vehicle"])
+        cells, scores, rmses = [], [], []
+        for f in KKF_BIAS_FACTORS:
+            st = kg.KkfSettings(gyro_bias_psd_rad2_s3=f * kg.KkfSettings().gyro_bias_psd_rad2_s3)
+            res = kg.run_kkf(d, veh, settings=st)
+            score, _ = neg2_log_likelihood(res.innov, res.S)
+            rmse = metrics(d, kg.kkf(d, veh, st).series)["beta_rmse_deg"]
+            scores.append(score)
+            rmses.append(rmse)
+            cells.append(f"{score:.0f} / {rmse:.3f}")
+        best = rmses[int(np.argmin(scores))]
+        picked.append(best)
+        fixed.append(rmses[KKF_BIAS_FACTORS.index(1.0)])
+        lines.append(f"| {sc} | {' | '.join(cells)} | {best:.3f} | {fixed[-1]:.3f} |")
+    lines += ["", f"Mean beta RMSE: at the likelihood's pick {np.mean(picked):.3f} deg, fixed "
+              f"typical density {np.mean(fixed):.3f} deg."]
+    return lines
+
+
 def table_one_lines() -> list[str]:
     veh = load_vehicle("blazer_suv")
     lines = [
@@ -263,6 +296,14 @@ def main() -> None:
         "sideslip factor). Seed 0. Time: whole method, auto over paper (first run includes warm-up).",
         "",
         *noise_lines(),
+        "",
+        "## KKF: is its gyro-bias walk identifiable from the course innovations?",
+        "",
+        "The KKF's course updates happen on straights only; their likelihood barely depends on the "
+        "bias-walk density on short drives and points away from the truth on others, so the KKF keeps "
+        "the typical density (its gyro noise is identified, `preset=\"auto\"`). Seed 0, right file.",
+        "",
+        *kkf_bias_lines(),
         "",
         "## The paper's findings (MKF with the paper preset)",
         "",
