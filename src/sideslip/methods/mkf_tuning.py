@@ -21,7 +21,8 @@ measures what the density drives:
 
 -2 ln L = sum over updates of ln S + nu^2 / S (constants dropped).  Cost: one filter pass per
 grid point (|STEER_YAW_GRID| x |BETA_GRID| = 12 passes of the numba loop, the discretised model
-table shared, Q_d being linear in Q_c), linear in the drive's length.  The grids stop at
+table shared, Q_d being linear in Q_c), linear in the drive's length; only each pass's scores
+are kept, so the memory is that of one pass.  The grids stop at
 the largest factors checked on the simulator (a sideslip density beyond 30x typical let the
 filter chase the course noise: beta_std no longer covered the error on the race lap).
 """
@@ -86,11 +87,14 @@ def choose_noise(
     ``Qd`` field); ``qd_of(steer_yaw_factor, beta_factor)`` the rescaled Q_d table; ``run`` the
     filter pass returning innovations (``gyro_innov``/``gyro_s``/``course_innov``/
     ``course_s``).  A factor not tuned stays 1."""
-    cache: dict[tuple[float, float], Any] = {}
+    # only the scores are kept (not the passes' state arrays): memory stays one pass
+    cache: dict[tuple[float, float], tuple[tuple[float, int], tuple[float, int]]] = {}
 
-    def result(fs: float, fb: float) -> Any:
+    def scores_of(fs: float, fb: float) -> tuple[tuple[float, int], tuple[float, int]]:
         if (fs, fb) not in cache:
-            cache[(fs, fb)] = run(dataclasses.replace(prob, Qd=qd_of(fs, fb)))
+            res = run(dataclasses.replace(prob, Qd=qd_of(fs, fb)))
+            cache[(fs, fb)] = (neg2_log_likelihood(res.gyro_innov, res.gyro_s),
+                               neg2_log_likelihood(res.course_innov, res.course_s))
         return cache[(fs, fb)]
 
     fs_scores: dict[str, float] = {}
@@ -102,8 +106,7 @@ def choose_noise(
         for f in STEER_YAW_GRID:
             score = np.inf
             for fb_try in BETA_GRID if tune_beta else (1.0,):
-                res = result(f, fb_try)
-                s_try, n_g = neg2_log_likelihood(res.gyro_innov, res.gyro_s)
+                (s_try, n_g), _ = scores_of(f, fb_try)
                 score = min(score, s_try)
             fs_scores[f"{f:g}"] = float(score)
             if n_g and score < best:
@@ -113,8 +116,7 @@ def choose_noise(
     if tune_beta:
         scores = []
         for f in BETA_GRID:
-            res = result(fs, f)
-            score, n_c = neg2_log_likelihood(res.course_innov, res.course_s)
+            _, (score, n_c) = scores_of(fs, f)
             fb_scores[f"{f:g}"] = score
             scores.append(score)
         if n_c:
