@@ -8,6 +8,7 @@ density s^2 / 50 Hz (rad^2 s).  Nothing here is the filter's own model.
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -24,6 +25,7 @@ from sideslip.vehicle import load_vehicle
 STEER_RATE_HZ = SensorConfig().steer_rate_hz
 
 
+@functools.cache
 def _drive(steer_noise_deg: float):  # type: ignore[no-untyped-def]
     cfg = SensorConfig(steer_noise_std=math.radians(steer_noise_deg))
     d = simulate("step_steer", seed=1, config=cfg)
