@@ -10,7 +10,9 @@ skipped) and reports, against comma's global pose (mount misalignment removed, s
 * wheel-speed scale factor, normalised to measured/true, against rear-wheel speed / pose speed;
 * dead reckoning: position error with GNSS (whole minute) and at the end of a GNSS outage made
   by blanking every GNSS column after the first ``OUTAGE_START_S`` seconds; a baseline without
-  any estimator (Android-bias-corrected gyro + raw CAN speed, started from the pose) for scale.
+  any estimator (Android-bias-corrected gyro + raw CAN speed, started from the pose) for scale;
+* sideslip: RMSE against the pose's and, for methods with ``beta_std``, the share of beta errors
+  inside 2 beta_std (0.95 for a calibrated Gaussian).
 
 Run: ``.venv/bin/python benchmarks/realdata_check.py [SEGMENT_DIR]``; writes
 ``benchmarks/results/realdata_check.md``.  The functions are reused by
@@ -143,7 +145,22 @@ def figures(drive: Drive, est: Estimate, facts: Mapping[str, float]) -> dict[str
     for key in ("beta_rmse_deg", "roll_rmse_deg", "r_rmse_degps"):
         if key in m:
             out[key] = m[key]
+    share = beta_two_sigma_share(drive, est)
+    if share is not None:
+        out["beta_2sigma_share"] = share
     return out
+
+
+def beta_two_sigma_share(drive: Drive, est: Estimate) -> float | None:
+    """Share of the pose rows faster than 5 m/s whose beta error is inside 2 beta_std (0.95
+    for a calibrated Gaussian), None without ``beta_std``."""
+    if "beta_std" not in est.series or "beta" not in est.series:
+        return None
+    rows = np.isfinite(drive["ref_beta"]) & (drive["ref_vx"] > 5.0)
+    if not rows.any():
+        return None
+    err = np.abs(wrap_angle(est["beta"][rows] - drive["ref_beta"][rows]))
+    return float(np.mean(err < 2.0 * est["beta_std"][rows]))
 
 
 def run_all(drive: Drive, vehicle: Vehicle) -> tuple[dict[str, dict[str, Any]], dict[str, str]]:
@@ -227,8 +244,9 @@ def main(segment: Path = SEGMENT) -> str:
         "the pose ratio; pos: position error with GNSS over the minute (RMSE, at the end).",
         "",
         "| method | s | finite | yaw RMSE deg | yaw mean deg | bias deg/s | bias-Android | "
-        "bias-pose | wheel ratio | wheel-pose | pos RMSE m | pos end m | beta RMSE deg |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+        "bias-pose | wheel ratio | wheel-pose | pos RMSE m | pos end m | beta RMSE deg | "
+        "beta 2sigma share |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for name, r in results.items():
         lines.append(
@@ -237,7 +255,7 @@ def main(segment: Path = SEGMENT) -> str:
             f"{_fmt(r.get('bias_minus_android_degps'))} | {_fmt(r.get('bias_minus_pose_degps'))} | "
             f"{_fmt(r.get('wheel_ratio'), 4)} | {_fmt(r.get('wheel_ratio_minus_pose'), 4)} | "
             f"{_fmt(r.get('pos_rmse_m'), 2)} | {_fmt(r.get('pos_end_m'), 2)} | "
-            f"{_fmt(r.get('beta_rmse_deg'))} |"
+            f"{_fmt(r.get('beta_rmse_deg'))} | {_fmt(r.get('beta_2sigma_share'), 2)} |"
         )
     lines += ["", "Skipped: " + ("; ".join(f"{k} ({v})" for k, v in skipped.items()) or "none"),
               "", f"## Dead reckoning through a GNSS outage ({OUTAGE_START_S:g} s to the end, "

@@ -167,6 +167,23 @@ def test_known_failures_name_real_checks() -> None:
                                               "sideslip", "roll"}  # fmt: skip
 
 
+# The seed-001 model-based filters' beta_std on a car, phone IMU and GNSS receiver nobody tuned
+# them on (issue 14): at least 0.90 of the beta errors inside 2 beta_std (0.95 calibrated).
+# Before issue 14 both put 0.80 inside: their sigma held the linear model's error only, not the
+# rear-axle thrust angle (a sideslip offset gyro + course cannot see) nor the sideslip noise the
+# drive's course innovations allow.
+BETA_2SIGMA_MIN = {"mkf": 0.90, "mkf_adaptive": 0.90}
+
+
+@pytest.mark.parametrize("name", sorted(BETA_2SIGMA_MIN))
+def test_model_based_kalman_filters_beta_std_is_honest_on_the_real_minute(
+    name: str, results: tuple[dict, dict]
+) -> None:
+    ran, _ = results
+    share = ran[name]["beta_2sigma_share"]
+    assert share >= BETA_2SIGMA_MIN[name], f"{name}: {share:.3f} of beta errors inside 2 sigma"
+
+
 def test_dead_reckoning_through_a_gnss_outage(setup: tuple[Drive, Vehicle],
                                               results: tuple[dict, dict]) -> None:
     drive, vehicle = setup

@@ -8,8 +8,10 @@ import math
 import numpy as np
 import pytest
 
-from sideslip.methods.kkf import KkfSettings, kkf, run_kkf, straight_flags
+from sideslip.methods.kkf import BIAS_WALK_GRID, Q_BIAS, KkfSettings, kkf, run_kkf, straight_flags
 from sideslip.methods.registry import all_methods, run_method
+from sideslip.simulate import simulate
+from sideslip.simulate.sensors import SensorConfig
 from sideslip.vehicle import load_vehicle
 from tests.conftest import sim_drive
 from tests.methods.seed001_drives import BLAZER, beta_err_deg, linear_drive, turns
@@ -117,3 +119,30 @@ def test_kkf_beta_std_covers_the_scale_factor_and_bank_errors(scenario: str) -> 
     err = np.abs(np.angle(np.exp(1j * (est["beta"] - d["ref_beta"]))))[fast]
     assert np.mean(err < 2 * est["beta_std"][fast]) >= 0.90
     assert est.innovations["course_nis"].shape == d.t.shape
+
+
+@pytest.mark.parametrize("walk", [2e-5, 2e-3])
+def test_kkf_auto_identifies_the_gyro_bias_walk_of_the_drive(walk: float) -> None:
+    """Truth: the simulator's gyro bias random walk (rad/s/sqrt(s)), density walk^2, on a 300 s
+    highway drive (nonlinear vehicle, the KKF's course updates on the straights only).  The
+    course-innovation likelihood's pick lies within one step of its decade grid (a factor 10)
+    of the true density: 0.05x and 525x the typical value give factors 0.1 and 1000."""
+    d = simulate("urban_highway", seed=1, config=SensorConfig(gyro_bias_walk=walk), duration_s=300)
+    noise = run_method("kkf", d, load_vehicle(d.meta["vehicle"])).params["noise"]
+    picked = noise["gyro_bias_psd_rad2_s3"]
+    assert walk**2 / 10.0 <= picked <= walk**2 * 10.0
+    ident = noise["gyro_bias_psd_identification"]
+    assert ident["factor"] in BIAS_WALK_GRID
+    assert picked == pytest.approx(ident["factor"] * Q_BIAS)
+    scores = ident["course_neg2_log_likelihood_by_factor"]
+    assert min(scores, key=scores.get) == f"{ident['factor']:g}"
+
+
+def test_kkf_presets_and_explicit_bias_walk_are_not_tuned() -> None:
+    d = linear_drive()
+    paper = run_method("kkf", d, BLAZER, {"preset": "paper"}).params["noise"]
+    assert paper["gyro_bias_psd_rad2_s3"] == pytest.approx(Q_BIAS)
+    assert paper["gyro_bias_psd_identification"] is None
+    given = run_method("kkf", d, BLAZER, {"gyro_bias_psd_rad2_s3": 1e-9}).params["noise"]
+    assert given["gyro_bias_psd_rad2_s3"] == pytest.approx(1e-9)
+    assert given["gyro_bias_psd_source"] == "settings / preset"

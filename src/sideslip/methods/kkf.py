@@ -17,8 +17,11 @@ mean above it, or speed below the gate, or no recent course -- leaves it at once
 
 Noise (:class:`KkfSettings`): ``preset="auto"`` (default) takes the gyro white noise from the
 drive (:func:`sideslip.signals.white_noise_sigma_100hz`), ``"typical"`` the fixed 0.3 deg/s at
-100 Hz of seed 001 Table I; the course noise is the receiver's (GNSS layer).  Seed 001 gives no
-further noise values, so there is no "paper" preset.
+100 Hz of seed 001 Table I (``"paper"`` is the same, by the paper's name); the course noise is
+the receiver's (GNSS layer).  The one process density, the gyro-bias random walk, is with
+``"auto"`` the factor on the typical value that maximises the likelihood of the course
+innovations (:func:`_bias_walk`; 5 filter passes); the presets keep the typical value.  Seed 001
+gives no further noise values.
 
 Honest uncertainty: the KKF's beta error in a turn is the heading error integrated from the gyro
 (scale factor times the heading change since the last straight, plus bias drift), which the
@@ -41,8 +44,9 @@ than ``KKF_MAX_COURSE_AGE_S`` (or 1.5 GNSS intervals) beta falls back to 0 with 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
-from typing import Literal
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any, Literal
 
 import numba
 import numpy as np
@@ -63,6 +67,7 @@ from sideslip.methods.mkf import (
     channel_diagnostics,
     initial_heading,
 )
+from sideslip.methods.mkf_tuning import neg2_log_likelihood
 from sideslip.methods.registry import SPEED, register
 from sideslip.models.mkf_model import V_GATE
 from sideslip.settings import settings_dict
@@ -89,7 +94,10 @@ SIGMA_BETA_STRAIGHT = math.radians(0.2)  # rad: beta is not exactly 0 on a strai
 KKF_MAX_COURSE_AGE_S = 1.0  # s: older course -> beta unknown, falls back to 0
 KKF_BETA_PRIOR = math.radians(3.0)  # rad: beta_std when the KKF has no fresh beta
 SIGMA_SCALE0 = 0.05  # 1-sigma prior of the gyro scale factor state (adaptive route)
-Q_BIAS = math.radians(0.005) ** 2  # (rad/s)^2/s: gyro bias random walk
+Q_BIAS = math.radians(0.005) ** 2  # (rad/s)^2/s: gyro bias random walk (typical)
+# factors on Q_BIAS tried by preset "auto" (benchmarks/results/kalman_gps_accuracy.md: the
+# course likelihood's pick lowers the mean beta RMSE over the simulated scenarios)
+BIAS_WALK_GRID = (0.1, 1.0, 10.0, 100.0, 1000.0)
 # the gyro's own straightness test is trusted once the bias 1-sigma is below a third of the
 # 'on' threshold; before that (e.g. a raw phone gyro) the GNSS course rate decides
 BIAS_KNOWN_VAR = (0.01 / 3.0) ** 2
@@ -99,9 +107,11 @@ BIAS_KNOWN_VAR = (0.01 / 3.0) ** 2
 class KkfSettings:
     """Noise and options of the KKF.
 
-    preset : "auto" (gyro noise from the drive) or "typical" (module docstring).
+    preset : "auto" (gyro noise from the drive), "paper" (seed 001 Table I gyro noise) or
+        "typical" (= "paper"); module docstring.
     gyro_sigma_100hz_rad_s : rad/s per gyro sample at 100 Hz; None = from the preset.
-    gyro_bias_psd_rad2_s3 : (rad/s)^2/s, bias random-walk density.
+    gyro_bias_psd_rad2_s3 : (rad/s)^2/s, bias random-walk density; None = the typical
+        :data:`Q_BIAS`, times the factor identified from the drive with ``preset="auto"``.
     gyro_scale_rel_sigma : 1-sigma of the gyro scale factor (measured/true - 1) behind the
         turn term of beta_std; 0 turns it off.
     road_bank_sigma : sin of the road bank, 1-sigma, behind the bank terms of beta_std when
@@ -111,9 +121,9 @@ class KkfSettings:
     consistency_window_s : s, window of the NIS test of the course updates (0: off).
     """
 
-    preset: Literal["auto", "typical"] = "auto"
+    preset: Literal["auto", "paper", "typical"] = "auto"
     gyro_sigma_100hz_rad_s: float | None = None
-    gyro_bias_psd_rad2_s3: float = Q_BIAS
+    gyro_bias_psd_rad2_s3: float | None = None
     gyro_scale_rel_sigma: float = 0.01
     road_bank_sigma: float = 0.03
     straight_on_rad_s: float = STRAIGHT_ON
@@ -123,8 +133,10 @@ class KkfSettings:
     consistency_window_s: float = 10.0
 
     def __post_init__(self) -> None:
-        if self.preset not in ("auto", "typical"):
-            raise ValueError(f"KkfSettings.preset = {self.preset!r}: expected 'auto' or 'typical'")
+        if self.preset not in ("auto", "paper", "typical"):
+            raise ValueError(
+                f"KkfSettings.preset = {self.preset!r}: expected 'auto', 'paper' or 'typical'"
+            )
         g = self.gyro_sigma_100hz_rad_s
         if g is not None and not (math.isfinite(g) and g > 0):
             raise ValueError(f"KkfSettings.gyro_sigma_100hz_rad_s = {g}: expected a number > 0")
@@ -132,7 +144,9 @@ class KkfSettings:
                      "straight_hold_s",
                      "consistency_window_s"):  # fmt: skip
             v = getattr(self, name)
-            if not (math.isfinite(v) and v >= 0):
+            if v is None and name == "gyro_bias_psd_rad2_s3":
+                continue
+            if v is None or not (math.isfinite(v) and v >= 0):
                 raise ValueError(f"KkfSettings.{name} = {v}: expected a number >= 0")
         if not 0 < self.straight_on_rad_s <= self.straight_off_rad_s:
             raise ValueError(
@@ -340,6 +354,8 @@ class KkfResult:
     beta_std_filter: FloatArray  # eq 6 from the filter's own P (no model-error terms)
     gyro_sigma_100hz: float  # rad/s, the gyro noise the filter ran with, and its source
     gyro_sigma_source: str
+    gyro_bias_psd: float = Q_BIAS  # (rad/s)^2/s, the bias walk it ran with
+    bias_walk_choice: dict[str, Any] = field(default_factory=dict)  # how it was identified
 
 
 def run_kkf(
@@ -367,11 +383,16 @@ def run_kkf(
     # the yaw-rate lever-arm term of the course (rx r / V) is removed with the raw gyro
     course = np.where(np.isfinite(cm.course), cm.course - cm.hr * np.nan_to_num(wz), np.nan)
     g_sigma, g_source = kkf_gyro_sigma(drive, st)
-    xs, pd, straight, innov, S = _kkf_loop(
-        t, wz, wz_mean, wz_fast, sample_variance(t, g_sigma), course, cm.sigma**2, crate, speed,
-        zero_rate, x0, P0, st.gyro_bias_psd_rad2_s3, st.straight_on_rad_s, st.straight_off_rad_s,
-        st.straight_hold_s, st.v_gate_m_s, SIGMA_BETA_STRAIGHT, BIAS_KNOWN_VAR,
-    )  # fmt: skip
+
+    def loop(q_bias: float) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray]:
+        return _kkf_loop(
+            t, wz, wz_mean, wz_fast, sample_variance(t, g_sigma), course, cm.sigma**2, crate,
+            speed, zero_rate, x0, P0, q_bias, st.straight_on_rad_s, st.straight_off_rad_s,
+            st.straight_hold_s, st.v_gate_m_s, SIGMA_BETA_STRAIGHT, BIAS_KNOWN_VAR,
+        )  # fmt: skip
+
+    q_bias, bias_choice = _bias_walk(st, loop)
+    xs, pd, straight, innov, S = loop(q_bias)
     fresh = np.isfinite(course)
     beta_f = np.where(fresh, wrap_angle(np.nan_to_num(course) - xs[:, 0]), np.nan)
     var_f = pd[:, 0] + np.nan_to_num(cm.sigma) ** 2
@@ -403,7 +424,34 @@ def run_kkf(
     beta_std = np.where(ok, std_h, KKF_BETA_PRIOR)
     beta_std_filter = np.where(ok, own_h, KKF_BETA_PRIOR)
     return KkfResult(beta, beta_std, xs, pd, straight, fresh, innov, S, beta_std_filter,
-                     g_sigma, g_source)  # fmt: skip
+                     g_sigma, g_source, q_bias, bias_choice)  # fmt: skip
+
+
+def _bias_walk(
+    st: KkfSettings, loop: Callable[[float], tuple[NDArray, ...]]
+) -> tuple[float, dict[str, Any]]:
+    """The gyro-bias walk density and how it was chosen: explicit, typical (presets "paper",
+    "typical"), or with "auto" the factor on :data:`Q_BIAS` of :data:`BIAS_WALK_GRID` that
+    maximises the likelihood of the course innovations (sum of ln S + nu^2/S, Mehra 1970; the
+    KKF's only process density, seen through the heading at the straights' course updates)."""
+    if st.gyro_bias_psd_rad2_s3 is not None:
+        return st.gyro_bias_psd_rad2_s3, {}
+    if st.preset != "auto":
+        return Q_BIAS, {}
+    scores: dict[str, float] = {}
+    best, factor = math.inf, 1.0
+    for f in BIAS_WALK_GRID:
+        out = loop(f * Q_BIAS)
+        score, n = neg2_log_likelihood(out[3], out[4])
+        scores[f"{f:g}"] = score
+        if n and score < best:
+            best, factor = score, f
+    return factor * Q_BIAS, {
+        "factor": factor,
+        "criterion": "max likelihood of the course innovations (straights) over factors on the "
+        "typical bias walk",
+        "course_neg2_log_likelihood_by_factor": scores,
+    }
 
 
 @register(
@@ -450,6 +498,9 @@ def kkf(drive: Drive, vehicle: Vehicle, settings: KkfSettings | None = None) -> 
             "gyro_sigma_100hz_rad_s": g_sigma,
             "gyro_sigma_source": g_source,
             "course_sigma": "gnss_vel_std / V (floor 0.1 deg), GNSS layer",
+            "gyro_bias_psd_rad2_s3": res.gyro_bias_psd,
+            "gyro_bias_psd_source": "drive" if res.bias_walk_choice else "settings / preset",
+            "gyro_bias_psd_identification": res.bias_walk_choice or None,
         },
         "residuals": {"course": channel_diagnostics(res.innov, res.S)},
         "health": health_params,

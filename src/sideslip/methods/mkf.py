@@ -9,10 +9,15 @@ gyro, course; the GNSS course from :func:`sideslip.gnss.course_at_cg`.
 
 Noise (:class:`MkfSettings`).  ``preset="auto"`` (default) takes the gyro's white noise from the
 drive itself (:func:`sideslip.signals.white_noise_sigma_100hz`, floored at a tenth of the typical
-value) and the course noise from the receiver's ``gnss_vel_std`` (GNSS layer); the model-error
-densities are the typical ones.  ``preset="typical"`` uses the typical gyro 0.3 deg/s at
-100 Hz (seed 001 Table I) for every drive.  Seed 001 publishes sensor noise only (Table I), no
-process noise, so there is no separate "paper" preset.  Explicit fields override the preset.
+value), the course noise from the receiver's ``gnss_vel_std`` (GNSS layer), and the
+process noise from the drive: factors on the typical steering/yaw-moment and sideslip densities
+chosen by the likelihood of the gyro and GNSS-course innovations
+(:mod:`sideslip.methods.mkf_tuning`; chosen values and scores in ``params['noise']``).
+``preset="paper"`` is seed 001's published noise: the gyro 0.3 deg/s at 100 Hz of Table I, and
+(the paper gives no process noise) the typical densities of
+:class:`sideslip.models.mkf_model.MkfNoise`; ``"typical"`` is the same set under its older name.
+Explicit fields override the preset; an explicit density is not tuned (its group keeps
+factor 1).
 
 Honest uncertainty (issue 14): the filter's own P describes the error only while the linear
 single-track model holds.  Where it stops fitting (tyres past their linear range, a wrong
@@ -23,7 +28,10 @@ quadrature: (i) the sideslip the model adds to the kinematic one (beta - lr/L de
 that scales with 1/cornering stiffness; at least its RMS over the last 2 s) carries a relative
 uncertainty ``stiffness_rel_sigma`` (vehicle files are 20-35 % off); (ii) the road bank the
 flat-road model ignores, through the model's steady-state bank gain, from the accelerometer's
-gravity cue when the drive has ``ay`` (:func:`bank_sigma`).
+gravity cue when the drive has ``ay`` (:func:`bank_sigma`); (iii) the rear-axle thrust angle
+(``thrust_angle_sigma_rad``): the single-track model assumes the rear wheels point along the
+body axis, a thrust angle makes the car crab by it on a straight ("dog tracking"), and it is
+unobservable from gyro + course (it adds to the course exactly like a heading offset).
 
 Low speed, standstill, reversing, outages (never NaN): below ``v_gate_m_s`` or reversing the
 low-speed model of :mod:`sideslip.models.mkf_model`; the course above the gate only (reversing:
@@ -37,8 +45,9 @@ wrong (see ``params['residuals']``) and on banked roads.
 
 from __future__ import annotations
 
+import dataclasses
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, Literal
 
 import numba
@@ -56,6 +65,7 @@ from sideslip.filters.kalman import (
 )
 from sideslip.filters.nis_windows import binned_nis_consistency
 from sideslip.frames import wrap_angle
+from sideslip.methods.mkf_tuning import choose_noise
 from sideslip.methods.registry import SPEED, register
 from sideslip.models.mkf_model import H_GYRO, V_GATE, MkfNoise, model_table
 from sideslip.models.single_track import continuous_arrays
@@ -74,6 +84,10 @@ from sideslip.vehicle import Vehicle
 FloatArray = NDArray[np.float64]
 
 SIGMA_GYRO_100HZ = math.radians(0.3)  # rad/s per sample at 100 Hz (seed 001 Table I)
+# Rear-axle thrust angle, 1-sigma: OEM alignment specifications accept +-0.15 deg (Chrysler,
+# 2000 Dodge Stratus) to +-0.30 deg (2007 Dodge Caravan, 2009 PT Cruiser service manuals); we
+# take +-0.2 deg as 2-sigma (cars in service drift within and beyond the acceptance range).
+THRUST_ANGLE_SIGMA = math.radians(0.1)
 SIGMA_ZERO_RATE = 1.0e-3  # rad/s: pseudo-measurement r = 0 at standstill
 SIGMA_BETA0 = math.radians(2.0)
 SIGMA_R0 = 0.05
@@ -94,12 +108,14 @@ STIFFNESS_WINDOW_S = 2.0  # s: window of the stiffness term of beta_std (a slalo
 class MkfSettings:
     """Noise and options of the MKF (``mkf``, ``mkf_adaptive``).
 
-    preset : "auto" (gyro noise identified from the drive) or "typical" (fixed typical
-        values); module docstring.
+    preset : "auto" (gyro noise and process noise identified from the drive), "paper"
+        (seed 001 Table I gyro noise, typical densities) or "typical" (= "paper"); module
+        docstring.
     gyro_sigma_100hz_rad_s : rad/s, 1-sigma per gyro sample at 100 Hz (scaled by sqrt(rate /
         100 Hz) for other rates); None = from the preset.
     steer_psd_rad2_s, beta_psd_rad2_per_s, yaw_accel_psd_rad2_s3, gyro_bias_psd_rad2_s3 :
-        continuous process-noise densities (:class:`sideslip.models.mkf_model.MkfNoise`).
+        continuous process-noise densities (:class:`sideslip.models.mkf_model.MkfNoise`);
+        None = the typical value, times the identified factor with ``preset="auto"``.
     v_gate_m_s : m/s, single-track model and GNSS course above this speed only.
     stiffness_rel_sigma : relative 1-sigma of the cornering stiffness of the vehicle file
         (module docstring); 0 turns the term off.
@@ -108,40 +124,62 @@ class MkfSettings:
     bank_floor_sigma : floor of the bank 1-sigma with an accelerometer cue (accelerometer
         bias ~0.1 m/s^2 and the cue's lag).
     consistency_window_s : s, window of the NIS test (0 turns the inflation off).
+    thrust_angle_sigma_rad : rad, 1-sigma of the rear-axle thrust angle behind beta_std (module
+        docstring); 0 turns the term off.
     """
 
-    preset: Literal["auto", "typical"] = "auto"
+    preset: Literal["auto", "paper", "typical"] = "auto"
     gyro_sigma_100hz_rad_s: float | None = None
-    steer_psd_rad2_s: float = MkfNoise.steer_psd
-    beta_psd_rad2_per_s: float = MkfNoise.beta_psd
-    yaw_accel_psd_rad2_s3: float = MkfNoise.yaw_accel_psd
-    gyro_bias_psd_rad2_s3: float = MkfNoise.gyro_bias_psd
+    steer_psd_rad2_s: float | None = None
+    beta_psd_rad2_per_s: float | None = None
+    yaw_accel_psd_rad2_s3: float | None = None
+    gyro_bias_psd_rad2_s3: float | None = None
     v_gate_m_s: float = V_GATE
     stiffness_rel_sigma: float = 0.3
     road_bank_sigma: float = 0.03
     bank_floor_sigma: float = 0.01
     consistency_window_s: float = 2.0
+    thrust_angle_sigma_rad: float = THRUST_ANGLE_SIGMA
 
     def __post_init__(self) -> None:
-        if self.preset not in ("auto", "typical"):
-            raise ValueError(f"MkfSettings.preset = {self.preset!r}: expected 'auto' or 'typical'")
+        if self.preset not in ("auto", "paper", "typical"):
+            raise ValueError(
+                f"MkfSettings.preset = {self.preset!r}: expected 'auto', 'paper' or 'typical'"
+            )
         g = self.gyro_sigma_100hz_rad_s
         if g is not None and not (math.isfinite(g) and g > 0):
             raise ValueError(f"MkfSettings.gyro_sigma_100hz_rad_s = {g}: expected a number > 0")
         for name in ("steer_psd_rad2_s", "beta_psd_rad2_per_s", "yaw_accel_psd_rad2_s3",
                      "gyro_bias_psd_rad2_s3", "stiffness_rel_sigma", "road_bank_sigma",
-                     "bank_floor_sigma", "consistency_window_s"):  # fmt: skip
+                     "bank_floor_sigma", "consistency_window_s",
+                     "thrust_angle_sigma_rad"):  # fmt: skip
             v = getattr(self, name)
-            if not (math.isfinite(v) and v >= 0):
+            if v is None and "psd" in name:
+                continue
+            if v is None or not (math.isfinite(v) and v >= 0):
                 raise ValueError(f"MkfSettings.{name} = {v}: expected a number >= 0")
         if not (math.isfinite(self.v_gate_m_s) and self.v_gate_m_s > STANDSTILL_SPEED):
             raise ValueError(f"MkfSettings.v_gate_m_s = {self.v_gate_m_s}: expected > 0.1 m/s")
 
     def noise(self) -> MkfNoise:
+        """The densities before identification: explicit values, else the typical ones."""
+        typ = MkfNoise()
+
+        def pick(v: float | None, default: float) -> float:
+            return default if v is None else v
+
         return MkfNoise(
-            self.steer_psd_rad2_s, self.beta_psd_rad2_per_s, self.yaw_accel_psd_rad2_s3,
-            self.gyro_bias_psd_rad2_s3,
+            pick(self.steer_psd_rad2_s, typ.steer_psd), pick(self.beta_psd_rad2_per_s, typ.beta_psd),
+            pick(self.yaw_accel_psd_rad2_s3, typ.yaw_accel_psd),
+            pick(self.gyro_bias_psd_rad2_s3, typ.gyro_bias_psd),
         )  # fmt: skip
+
+    def tuned_groups(self) -> tuple[bool, bool]:
+        """(steering/yaw, sideslip): which density groups ``preset="auto"`` identifies."""
+        if self.preset != "auto":
+            return False, False
+        steer_yaw = self.steer_psd_rad2_s is None and self.yaw_accel_psd_rad2_s3 is None
+        return steer_yaw, self.beta_psd_rad2_per_s is None
 
 
 def gyro_sigma(drive: Drive, settings: MkfSettings) -> tuple[float, str]:
@@ -182,6 +220,7 @@ class MkfProblem:
     x0: FloatArray
     P0: FloatArray
     low: NDArray[np.bool_]
+    noise_choice: dict[str, Any] = field(default_factory=dict)
 
 
 def initial_heading(t: FloatArray, wz: FloatArray, course: FloatArray) -> float:
@@ -216,9 +255,17 @@ def mkf_problem(
     x0 = np.array([0.0, 0.0, initial_heading(t, wz, cm.course), 0.0])
     P0 = np.diag([SIGMA_BETA0, SIGMA_R0, SIGMA_PSI0, SIGMA_BIAS0]) ** 2
     g_sigma, _ = gyro_sigma(drive, st)
-    return MkfProblem(
+    prob = MkfProblem(
         tab.Ad, tab.Bd, tab.Qd, tab.idx, u, wz, sample_variance(t, g_sigma), cm.course,
         cm.sigma**2, cm.hr, np.abs(speed) < STANDSTILL_SPEED, x0, P0, tab.low,
+    )  # fmt: skip
+    tune_sy, tune_b = st.tuned_groups()
+    if not (tune_sy or tune_b):
+        return prob
+    choice = choose_noise(prob, tab.scaled_qd, run_mkf_problem, tune_sy, tune_b)
+    return dataclasses.replace(
+        prob, Qd=tab.scaled_qd(choice.steer_yaw_factor, choice.beta_factor),
+        noise_choice=choice.as_params(),
     )  # fmt: skip
 
 
@@ -347,6 +394,23 @@ def bank_sigma(
     return np.hypot(settings.bank_floor_sigma, cue), "accelerometer cue (ay - V r) / g"
 
 
+def _process_noise_params(settings: MkfSettings, prob: MkfProblem) -> dict[str, Any]:
+    """The process-noise densities the filter ran with and how they were chosen."""
+    base = settings.noise()
+    fs = float(prob.noise_choice.get("steer_yaw_factor", 1.0))
+    fb = float(prob.noise_choice.get("beta_factor", 1.0))
+    source = "drive (mkf_tuning)" if prob.noise_choice else (
+        "settings / preset " + repr(settings.preset))
+    return {
+        "steer_psd_rad2_s": base.steer_psd * fs,
+        "yaw_accel_psd_rad2_s3": base.yaw_accel_psd * fs,
+        "beta_psd_rad2_per_s": base.beta_psd * fb,
+        "gyro_bias_psd_rad2_s3": base.gyro_bias_psd,
+        "process_noise_source": source,
+        "process_noise_identification": prob.noise_choice or None,
+    }
+
+
 def mkf_estimate(
     name: str,
     drive: Drive,
@@ -386,7 +450,8 @@ def mkf_estimate(
     bank_beta_sd = np.abs(bank_beta_gain(vehicle, speed)) * bank_sd
     if bank is not None:
         bank_beta_sd = np.zeros(t.size)  # the bank is a known input
-    beta_std = np.sqrt(beta_std**2 * inflation + model_sigma**2 + bank_beta_sd**2)
+    thrust = settings.thrust_angle_sigma_rad
+    beta_std = np.sqrt(beta_std**2 * inflation + model_sigma**2 + bank_beta_sd**2 + thrust**2)
     g_sigma, g_source = gyro_sigma(drive, settings)
     series = {
         "beta": res.x[:, 0],
@@ -419,6 +484,7 @@ def mkf_estimate(
                     if g_source.startswith("drive")
                     else g_source
                 ),
+                **_process_noise_params(settings, prob),
             },
             "residuals": residual_diagnostics(res),
             "health": health_params,
@@ -427,6 +493,7 @@ def mkf_estimate(
                 "stiffness": f"{settings.stiffness_rel_sigma:g} x max(|beta - lr/L delta|, its RMS "
                 f"over {STIFFNESS_WINDOW_S:g} s)",
                 "road_bank": bank_source,
+                "thrust_angle": f"{math.degrees(thrust):g} deg (rear-axle alignment, unobservable)",
             },
             "settings": settings_dict(settings),
         }

@@ -102,13 +102,24 @@ def low_speed_continuous(
 @dataclass(frozen=True)
 class ModelTable:
     """Discrete models for each row step: ``Ad``/``Bd``/``Qd`` (K,4,4)/(K,4,2)/(K,4,4),
-    ``idx[k]`` the entry propagating row k-1 to k, ``low`` rows in the low-speed mode."""
+    ``idx[k]`` the entry propagating row k-1 to k, ``low`` rows in the low-speed mode.
+
+    ``Qd_parts`` (3,K,4,4): the discrete process noise split by source, Q_d being linear in
+    Q_c (Van Loan): [0] steering + yaw-moment densities, [1] the sideslip density, [2] the
+    rest (gyro-bias walk, low-speed model); ``Qd`` = their sum, :meth:`scaled_qd` rescales.
+    """
 
     Ad: FloatArray
     Bd: FloatArray
     Qd: FloatArray
     idx: NDArray[np.intp]
     low: NDArray[np.bool_]
+    Qd_parts: FloatArray
+
+    def scaled_qd(self, steer_yaw_factor: float, beta_factor: float) -> FloatArray:
+        """Q_d with the steering/yaw and sideslip densities times the given factors."""
+        q = steer_yaw_factor * self.Qd_parts[0] + beta_factor * self.Qd_parts[1] + self.Qd_parts[2]
+        return np.ascontiguousarray(q)
 
 
 def model_table(
@@ -129,16 +140,31 @@ def model_table(
     k = uniq.shape[0]
     A = np.zeros((k, 4, 4))
     B = np.zeros((k, 4, 2))
-    Qc = np.zeros((k, 4, 4))
+    Qc = np.zeros((3, k, 4, 4))  # by source: steer + yaw, beta, rest (ModelTable.Qd_parts)
+    sources = (
+        MkfNoise(noise.steer_psd, 0.0, noise.yaw_accel_psd, 0.0),
+        MkfNoise(0.0, noise.beta_psd, 0.0, 0.0),
+        MkfNoise(0.0, 0.0, 0.0, noise.gyro_bias_psd),
+    )
     fast = uniq[:, 0] >= 0
     if fast.any():
-        a, b, q = mkf_continuous(vehicle, np.exp(uniq[fast, 0] * SPEED_LOG_STEP), noise)
-        A[fast], B[fast], Qc[fast] = a, b, q
+        speeds = np.exp(uniq[fast, 0] * SPEED_LOG_STEP)
+        for i, part in enumerate(sources):
+            a, b, q = mkf_continuous(vehicle, speeds, part)
+            A[fast], B[fast], Qc[i, fast] = a, b, q
     if (~fast).any():
         a, b, q = low_speed_continuous(vehicle, noise)
-        A[~fast], B[~fast], Qc[~fast] = a, b, q
-    Ad, Bd, Qd = (np.ascontiguousarray(m) for m in discretise_batch(A, B, Qc, uniq[:, 1] * 1e-6))
-    return ModelTable(Ad, Bd, Qd, inv.astype(np.intp), low)
+        A[~fast], B[~fast], Qc[2, ~fast] = a, b, q
+    dt = uniq[:, 1] * 1e-6
+    # one batch: the three noise sources share A (Q_d is linear in Q_c)
+    Ad3, Bd3, Qd3 = discretise_batch(
+        np.concatenate([A] * 3), np.concatenate([B] * 3), Qc.reshape(3 * k, 4, 4),
+        np.concatenate([dt] * 3),
+    )  # fmt: skip
+    parts = np.ascontiguousarray(Qd3.reshape(3, k, 4, 4))
+    Ad, Bd = np.ascontiguousarray(Ad3[:k]), np.ascontiguousarray(Bd3[:k])
+    Qd = np.ascontiguousarray(parts.sum(axis=0))
+    return ModelTable(Ad, Bd, Qd, inv.astype(np.intp), low, parts)
 
 
 # ==========================================================================================
