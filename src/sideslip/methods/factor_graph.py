@@ -78,6 +78,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass, replace
+from functools import cached_property
 from typing import Any, Literal
 
 import numpy as np
@@ -243,12 +244,12 @@ class SideslipGraph:
     sigma0: FloatArray
     low_speed: NDArray[np.bool_]
 
-    @property
+    @cached_property
     def wq(self) -> FloatArray:
-        """Weights 1/sigma^2 of the dynamic factors, (N-1, 2)."""
+        """Weights 1/sigma^2 of the dynamic factors, (N-1, 2) (computed once per graph)."""
         return np.asarray(1.0 / self.sigma_q**2, dtype=float)
 
-    @property
+    @cached_property
     def wu(self) -> FloatArray:
         """Weights 1/sigma^2 of the unary factors, (N, 3); 0 where a factor is absent."""
         with np.errstate(divide="ignore"):
@@ -316,11 +317,18 @@ def build_graph(
     n = t.size
     delta = inputs.delta[sl]
     low = inputs.low_speed[sl]
-    A, B, _, _ = continuous_arrays(vehicle, inputs.v_dynamics[sl], v_min=settings.speed_gate)
-    _, _, C, D = continuous_arrays(vehicle, inputs.v_measurement[sl], v_min=settings.speed_gate)
+    # one model evaluation at the a_y factor's speed; the dynamics' (clamped higher only where
+    # forward Euler needs it, module docstring) re-evaluated on those few rows
+    v_dyn = inputs.v_dynamics[sl]
+    A, B, C, D = continuous_arrays(vehicle, inputs.v_measurement[sl], v_min=settings.speed_gate)
+    faster = np.flatnonzero(v_dyn != inputs.v_measurement[sl])
+    if faster.size:
+        A[faster], B[faster], _, _ = continuous_arrays(vehicle, v_dyn[faster], v_min=settings.speed_gate)
 
     dt = np.diff(t)
-    F = np.eye(2)[None, :, :] + dt[:, None, None] * A[:-1]
+    F = dt[:, None, None] * A[:-1]
+    F[:, 0, 0] += 1.0
+    F[:, 1, 1] += 1.0
     g = dt[:, None] * B[:-1, :, 0] * delta[:-1, None]
     scale = np.sqrt(dt / settings.reference_dt)
     sigma_q = np.empty((n - 1, 2))
@@ -329,29 +337,31 @@ def build_graph(
     sigma_q[low[:-1]] *= settings.low_speed_inflation
     # a time gap restarts the chain: no dynamics across it, the prior's sigmas instead
     gap = inputs.time_gap[start : start + n - 1]
-    F[gap] = 0.0
-    g[gap] = 0.0
-    sigma_q[gap] = (settings.prior_beta, settings.prior_yaw_rate)
+    if gap.any():
+        F[gap] = 0.0
+        g[gap] = 0.0
+        sigma_q[gap] = (settings.prior_beta, settings.prior_yaw_rate)
 
     wz = inputs.wz[sl]
     ay = inputs.ay[sl]
     Hu = np.zeros((n, 3, 2))
-    zu = np.zeros((n, 3))
-    sigma_u = np.full((n, 3), np.inf)
+    zu = np.empty((n, 3))
+    sigma_u = np.empty((n, 3))
     # yaw rate (unary on r_k)
     Hu[:, 0, 1] = 1.0
     ok = np.isfinite(wz)
-    zu[ok, 0] = wz[ok]
-    sigma_u[ok, 0] = settings.sigma("yaw_rate")
+    np.copyto(zu[:, 0], np.where(ok, wz, 0.0))
+    np.copyto(sigma_u[:, 0], np.where(ok, settings.sigma("yaw_rate"), np.inf))
     # lateral acceleration (binary on beta_k, r_k), above the speed gate only
     Hu[:, 1, :] = C[:, 1, :]
     ok = np.isfinite(ay) & ~low
-    zu[ok, 1] = ay[ok] - D[ok, 1, 0] * delta[ok]
-    sigma_u[ok, 1] = settings.sigma("lateral_acceleration")
+    np.copyto(zu[:, 1], np.where(ok, ay - D[:, 1, 0] * delta, 0.0))
+    np.copyto(sigma_u[:, 1], np.where(ok, settings.sigma("lateral_acceleration"), np.inf))
     # low-speed kinematic sideslip (unary on beta_k)
     Hu[:, 2, 0] = 1.0
+    zu[:, 2] = 0.0
     zu[low, 2] = np.arctan(vehicle.lr * np.tan(np.clip(delta[low], -1.2, 1.2)) / vehicle.wheelbase)
-    sigma_u[low, 2] = settings.low_speed_beta
+    np.copyto(sigma_u[:, 2], np.where(low, settings.low_speed_beta, np.inf))
     return SideslipGraph(
         F=np.ascontiguousarray(F),
         g=np.ascontiguousarray(g),
