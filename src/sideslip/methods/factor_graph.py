@@ -42,14 +42,15 @@ tested).  On-line this is an output delay of window x dt (50 ms at 100 Hz).  The
 streamed in chunks of ``LAG_CHUNK`` rows, so the working memory does not grow with the drive.
 Both use the same settings here (the paper tuned its KF and FG differently, its Section 4).
 
-Noise settings (:class:`~sideslip.methods.fg_settings.FactorGraphSettings`, in its own
-module): ``preset`` "auto" (default) identifies the a_y and beta-model sigmas from the drive (:mod:`sideslip.methods.fg_tuning`: least error of the
-gyro predicted 0.3 s ahead), "paper" is the authors' published set, "physics" fixed values
-argued in the dataclass; explicit values override.  Model sigmas are per ``reference_dt``
-step and scale with sqrt(dt/reference_dt).  Honest 1-sigma: block sums of the graph's Kalman
-innovations over 2 s windows inflate the variance where the model stops fitting (``health``),
-and a vehicle file's stiffness error, which no test on the drive can see, adds
-(``stiffness_rel_sigma`` x slip angle)^2 to beta's variance.
+Noise settings (:class:`~sideslip.methods.fg_settings.FactorGraphSettings`, in its own module):
+``preset`` "auto" (default) identifies the a_y and beta-model sigmas from the drive
+(:mod:`sideslip.methods.fg_tuning`: least error of the gyro predicted 0.3 s ahead), "paper" is
+the authors' published set, "physics" fixed values argued in the dataclass; explicit values
+override. Model sigmas are per ``reference_dt`` step and scale with sqrt(dt/reference_dt).
+Honest 1-sigma: block sums of the graph's Kalman innovations over 2 s windows inflate the
+variance where the model stops fitting (``health``), and a vehicle file's stiffness error,
+which no test on the drive can see, adds (``stiffness_rel_sigma`` x slip angle)^2 to beta's
+variance.
 
 Accelerometer.  The paper uses the lateral accelerometer raw; so do we.  It reads specific
 force: the tyre forces over m plus g sin(suspension roll).  The model's right side C x + D delta
@@ -79,6 +80,7 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass, replace
 from functools import cached_property
 
+import numba
 import numpy as np
 from numpy.typing import NDArray
 
@@ -191,6 +193,74 @@ def graph_inputs(
     return GraphInputs(t, delta, v_dynamics, v_measurement, gap, low, drive["wz"], drive["ay"])
 
 
+@numba.njit(cache=True)
+def _chain_factors(
+    t: FloatArray,
+    A: FloatArray,
+    B: FloatArray,
+    C: FloatArray,
+    D: FloatArray,
+    delta: FloatArray,
+    low: NDArray[np.bool_],
+    gap: NDArray[np.bool_],
+    wz: FloatArray,
+    ay: FloatArray,
+    sigmas: FloatArray,
+    reference_dt: float,
+    low_speed_inflation: float,
+    prior_beta: float,
+    prior_yaw_rate: float,
+    low_speed_beta: float,
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
+    """The chain factors of :func:`build_graph` in one pass over the rows (layout of
+    :class:`SideslipGraph`; the low-speed factor's value is filled by the caller).
+
+    Dynamic factor k: F = I + dt A_k, g = dt B_k delta_k (forward Euler, paper eq 6), sigmas
+    ``sigmas[:2]`` x sqrt(dt / reference_dt), x ``low_speed_inflation`` below the speed gate;
+    across a time gap F = 0, g = 0 and the prior's sigmas (a restart).  Unary factors: yaw
+    rate r_k = wz_k (sigma ``sigmas[2]``), a_y: C_k x_k = ay_k - D_k delta_k above the gate
+    (``sigmas[3]``), low-speed beta (``low_speed_beta``) below it; sigma inf where absent.
+    """
+    n = t.size
+    F = np.empty((n - 1, 2, 2))
+    g = np.empty((n - 1, 2))
+    sigma_q = np.empty((n - 1, 2))
+    for k in range(n - 1):
+        if gap[k]:
+            F[k] = 0.0
+            g[k] = 0.0
+            sigma_q[k, 0] = prior_beta
+            sigma_q[k, 1] = prior_yaw_rate
+            continue
+        dt = t[k + 1] - t[k]
+        for i in range(2):
+            for j in range(2):
+                F[k, i, j] = dt * A[k, i, j] + (1.0 if i == j else 0.0)
+            g[k, i] = dt * B[k, i, 0] * delta[k]
+        scale = np.sqrt(dt / reference_dt)
+        for i in range(2):
+            sigma_q[k, i] = sigmas[i] * scale
+            if low[k]:
+                sigma_q[k, i] *= low_speed_inflation
+    Hu = np.zeros((n, 3, 2))
+    zu = np.zeros((n, 3))
+    sigma_u = np.full((n, 3), np.inf)
+    for k in range(n):
+        Hu[k, 0, 1] = 1.0
+        Hu[k, 1, 0] = C[k, 1, 0]
+        Hu[k, 1, 1] = C[k, 1, 1]
+        Hu[k, 2, 0] = 1.0
+        if np.isfinite(wz[k]):
+            zu[k, 0] = wz[k]
+            sigma_u[k, 0] = sigmas[2]
+        if low[k]:
+            sigma_u[k, 2] = low_speed_beta
+        elif np.isfinite(ay[k]):
+            zu[k, 1] = ay[k] - D[k, 1, 0] * delta[k]
+            sigma_u[k, 1] = sigmas[3]
+    return F, g, sigma_q, Hu, zu, sigma_u
+
+
 def build_graph(
     inputs: GraphInputs,
     vehicle: Vehicle,
@@ -212,43 +282,16 @@ def build_graph(
     if faster.size:
         A[faster], B[faster], _, _ = continuous_arrays(vehicle, v_dyn[faster], v_min=settings.speed_gate)
 
-    dt = np.diff(t)
-    F = dt[:, None, None] * A[:-1]
-    F[:, 0, 0] += 1.0
-    F[:, 1, 1] += 1.0
-    g = dt[:, None] * B[:-1, :, 0] * delta[:-1, None]
-    scale = np.sqrt(dt / settings.reference_dt)
-    sigma_q = np.empty((n - 1, 2))
-    sigma_q[:, 0] = settings.sigma("model_beta") * scale
-    sigma_q[:, 1] = settings.sigma("model_yaw_rate") * scale
-    sigma_q[low[:-1]] *= settings.low_speed_inflation
-    # a time gap restarts the chain: no dynamics across it, the prior's sigmas instead
     gap = inputs.time_gap[start : start + n - 1]
-    if gap.any():
-        F[gap] = 0.0
-        g[gap] = 0.0
-        sigma_q[gap] = (settings.prior_beta, settings.prior_yaw_rate)
-
-    wz = inputs.wz[sl]
-    ay = inputs.ay[sl]
-    Hu = np.zeros((n, 3, 2))
-    zu = np.empty((n, 3))
-    sigma_u = np.empty((n, 3))
-    # yaw rate (unary on r_k)
-    Hu[:, 0, 1] = 1.0
-    ok = np.isfinite(wz)
-    np.copyto(zu[:, 0], np.where(ok, wz, 0.0))
-    np.copyto(sigma_u[:, 0], np.where(ok, settings.sigma("yaw_rate"), np.inf))
-    # lateral acceleration (binary on beta_k, r_k), above the speed gate only
-    Hu[:, 1, :] = C[:, 1, :]
-    ok = np.isfinite(ay) & ~low
-    np.copyto(zu[:, 1], np.where(ok, ay - D[:, 1, 0] * delta, 0.0))
-    np.copyto(sigma_u[:, 1], np.where(ok, settings.sigma("lateral_acceleration"), np.inf))
+    sigmas = np.array([settings.sigma(k) for k in ("model_beta", "model_yaw_rate", "yaw_rate",
+                                                   "lateral_acceleration")])  # fmt: skip
+    F, g, sigma_q, Hu, zu, sigma_u = _chain_factors(
+        t, A, B, C, D, delta, low, gap, inputs.wz[sl], inputs.ay[sl], sigmas,
+        settings.reference_dt, settings.low_speed_inflation, settings.prior_beta,
+        settings.prior_yaw_rate, settings.low_speed_beta,
+    )  # fmt: skip
     # low-speed kinematic sideslip (unary on beta_k)
-    Hu[:, 2, 0] = 1.0
-    zu[:, 2] = 0.0
     zu[low, 2] = np.arctan(vehicle.lr * np.tan(np.clip(delta[low], -1.2, 1.2)) / vehicle.wheelbase)
-    np.copyto(sigma_u[:, 2], np.where(low, settings.low_speed_beta, np.inf))
     return SideslipGraph(
         F=np.ascontiguousarray(F),
         g=np.ascontiguousarray(g),
@@ -400,6 +443,41 @@ def solve_kalman(graph: SideslipGraph) -> tuple[FloatArray, FloatArray, FloatArr
     )  # fmt: skip
 
 
+@numba.njit(cache=True)
+def _one_sigma(
+    x: FloatArray,
+    var: FloatArray,
+    inflation: FloatArray,
+    delta: FloatArray,
+    v: FloatArray,
+    lf: float,
+    lr: float,
+    stiffness_rel_sigma: float,
+) -> tuple[FloatArray, FloatArray]:
+    """1-sigma of beta and r, one pass per row: the solver's variances (clipped at 0) times
+    the consistency ``inflation`` (empty: none), plus for beta (stiffness_rel_sigma x the
+    larger axle slip angle)^2 with alpha_f = delta - beta - lf r / V, alpha_r = lr r / V - beta
+    at the a_y factor's speed V (module docstring)."""
+    n = x.shape[0]
+    beta_std = np.empty(n)
+    r_std = np.empty(n)
+    inflate = inflation.size > 0
+    for k in range(n):
+        vb = var[k, 0] if not var[k, 0] < 0.0 else 0.0
+        vr = var[k, 1] if not var[k, 1] < 0.0 else 0.0
+        if inflate:
+            vb = vb * inflation[k]
+            vr = vr * inflation[k]
+        if stiffness_rel_sigma > 0.0:
+            alpha_r = lr * x[k, 1] / v[k] - x[k, 0]
+            alpha_f = delta[k] - x[k, 0] - lf * x[k, 1] / v[k]
+            a = stiffness_rel_sigma * max(abs(alpha_f), abs(alpha_r))
+            vb += a * a
+        beta_std[k] = np.sqrt(vb)
+        r_std[k] = np.sqrt(vr)
+    return beta_std, r_std
+
+
 def _estimate(
     name: str,
     drive: Drive,
@@ -428,29 +506,24 @@ def _estimate(
         "low_speed_fraction": float(low_speed.mean()) if low_speed.size else 0.0,
         **extra,
     }
-    var = np.maximum(var, 0.0)
     out: dict[str, FloatArray] = {"beta": x[:, 0].copy(), "r": x[:, 1].copy()}
     inn: dict[str, FloatArray] = {}
+    inflation = np.ones(0)
     if innovations is not None:
         nu, S = innovations
         check = block_consistency(drive.t, nu[:, :2], S[:, :2], causal)
-        var = var * check.inflation[:, None]
+        inflation = check.inflation
         out["health"] = check.health
         params["health"] = {**check.summary(drive.t), "test": (
             f"sums of the graph's Kalman innovations (gyro, a_y) over {BLOCK_S:g} s blocks, "
             f"chi2 99 % over {WINDOW_S:g} s windows; variance x NIS ratio where it fails")}
         inn = {"wz": nu[:, 0], "wz_s": S[:, 0], "ay": nu[:, 1], "ay_s": S[:, 1]}
     if settings.stiffness_rel_sigma > 0:
-        # axle slip angles (module docstring) at the model speed; the larger one
-        v = prep.inputs.v_measurement
-        alpha_r = vehicle.lr * x[:, 1] / v - x[:, 0]
-        alpha_f = prep.inputs.delta - x[:, 0] - vehicle.lf * x[:, 1] / v
-        alpha = np.maximum(np.abs(alpha_f), np.abs(alpha_r))
-        var[:, 0] += (settings.stiffness_rel_sigma * alpha) ** 2
         params["stiffness_rel_sigma"] = settings.stiffness_rel_sigma
-    std = np.sqrt(var)
-    out["beta_std"] = std[:, 0]
-    out["r_std"] = std[:, 1]
+    out["beta_std"], out["r_std"] = _one_sigma(
+        x, var, inflation, prep.inputs.delta, prep.inputs.v_measurement, vehicle.lf, vehicle.lr,
+        settings.stiffness_rel_sigma,
+    )  # fmt: skip
     return Estimate(name, drive.t, out, params, inn)
 
 
