@@ -17,13 +17,13 @@ O(N nx p).
 Functions
 ---------
 * :func:`assemble_chain` -- the normal equations (band + right-hand side), numba-compiled.
-* :func:`solve_chain` -- banded Cholesky (LAPACK ``pbtrf`` through scipy) and the solution.
+* :func:`solve_chain` -- banded Cholesky (compiled, LAPACK's ``pbtf2`` algorithm) and the solution.
 * :func:`selected_inverse` -- the band of H^{-1} (Takahashi et al. 1973 recursion on the
   Cholesky factor), giving marginal covariances without a dense inverse.
 * :func:`fixed_lag_chain` -- a fixed-lag smoother on the same factors: a sliding window whose
   oldest state is marginalised exactly (Schur complement) into the next window's prior, so
   memory is constant in N.
-* :func:`cholesky_band`, :func:`solve_band` -- the numba banded Cholesky used inside windows.
+* :func:`cholesky_band`, :func:`solve_band` -- the numba banded Cholesky (whole chains and windows).
 
 Prior convention: the prior is given in information form ``(Lam0, eta0)`` with
 ``eta0 = Lam0 x0``; this is what marginalisation produces.
@@ -34,7 +34,6 @@ from __future__ import annotations
 import numba
 import numpy as np
 from numpy.typing import NDArray
-from scipy.linalg import cho_solve_banded, cholesky_banded
 
 FloatArray = NDArray[np.float64]
 
@@ -133,12 +132,17 @@ def _assemble_into(
 def solve_chain(ab: FloatArray, rhs: FloatArray) -> tuple[FloatArray, FloatArray]:
     """Solve H x = rhs for SPD banded H; returns ``(x, cb)`` with cb the lower Cholesky band.
 
-    Raises ``numpy.linalg.LinAlgError`` if H is not positive definite (an unobservable state:
-    give every state a prior or a dynamic factor).
+    The compiled :func:`cholesky_band` and its substitutions (the algorithm of LAPACK's
+    unblocked ``pbtf2``, which ``pbtrf`` uses at these bandwidths; no library call per column),
+    ``ab`` and ``rhs`` are left unchanged.  Raises ``numpy.linalg.LinAlgError`` if H is not
+    positive definite (an unobservable state: give every state a prior or a dynamic factor).
     """
-    cb = cholesky_banded(ab, lower=True, check_finite=False)
-    x = cho_solve_banded((cb, True), rhs, check_finite=False)
-    return np.asarray(x, dtype=float), np.asarray(cb, dtype=float)
+    cb = np.array(ab, dtype=float, order="C")
+    if not cholesky_band(cb):
+        raise np.linalg.LinAlgError("banded normal matrix is not positive definite")
+    x = np.array(rhs, dtype=float)
+    _solve_band_inplace(cb, x)
+    return x, cb
 
 
 @numba.njit(cache=True)

@@ -87,7 +87,6 @@ from numpy.typing import NDArray
 from sideslip.drive import Drive
 from sideslip.estimate import Estimate
 from sideslip.filters.banded import assemble_chain, fixed_lag_chain, selected_inverse, solve_chain
-from sideslip.filters.kalman import predict_ws_nb
 from sideslip.methods.fg_settings import DEFAULT_SETTINGS, FactorGraphSettings
 from sideslip.methods.fg_tuning import (
     BLOCK_S,
@@ -95,6 +94,7 @@ from sideslip.methods.fg_tuning import (
     WINDOW_S,
     Tuning,
     block_consistency,
+    chain_innovations,
     chain_kalman,
     choose_sigmas,
 )
@@ -404,8 +404,8 @@ def _lag_pass(
     x = np.zeros((n, 2))
     var = np.zeros((n, 2))
     cov = np.zeros(n)
-    nu = np.full((n, 3), np.nan) if with_innovations else np.zeros((0, 3))
-    S = np.full((n, 3), np.nan) if with_innovations else np.zeros((0, 3))
+    nu = np.full((n, 2), np.nan) if with_innovations else np.zeros((0, 2))
+    S = np.full((n, 2), np.nan) if with_innovations else np.zeros((0, 2))
     lam = np.diag(1.0 / np.array([settings.prior_beta, settings.prior_yaw_rate]) ** 2)
     eta = np.zeros(2)  # prior mean 0
     x_kf = np.zeros(2)  # the filter's prediction at the chunk's first row
@@ -421,16 +421,12 @@ def _lag_pass(
         x[a:b] = xs
         var[a:b] = vs
         cov[a:b] = cs[:, 0]
-        if with_innovations:
+        if with_innovations:  # the filter's prediction carries across the chunk boundary
             m = b - a
-            xf, vf, cf, nu[a:b], S[a:b] = chain_kalman(
-                graph.F, graph.g, graph.wq, graph.Hu[:m], graph.zu[:m], graph.wu[:m], x_kf, P_kf
-            )
-            if b < n:  # predict across the chunk boundary with the filter's own kernel
-                x_kf = xf[-1].copy()
-                P_kf = np.array([[vf[-1, 0], cf[-1]], [cf[-1], vf[-1, 1]]])
-                predict_ws_nb(x_kf, P_kf, graph.F[m - 1], np.diag(1.0 / graph.wq[m - 1]),
-                              graph.g[m - 1], np.empty((6, 2)))  # fmt: skip
+            nu[a:b], S[a:b], x_kf, P_kf = chain_innovations(
+                graph.F[:m], graph.g[:m], graph.wq[:m], graph.Hu[:m], graph.zu[:m],
+                graph.wu[:m], x_kf, P_kf, 2,
+            )  # fmt: skip
     return x, var, cov, ((nu, S) if with_innovations else None)
 
 
@@ -493,7 +489,7 @@ def _estimate(
 ) -> Estimate:
     """Series, params and the consistency-inflated 1-sigma of one of the three methods.
 
-    ``innovations``: the graph's Kalman-filter innovations and their variances (N, 3), tested
+    ``innovations``: the graph's Kalman-filter innovations and their variances (N, >= 2), tested
     in blocks (:func:`sideslip.methods.fg_tuning.block_consistency`) over 2 s windows, trailing for the
     on-line kf_linear and fg_lag, centred for fg_batch; None when ``settings.consistency`` is
     off.  Where a window fails, the variances of beta and r are multiplied by its NIS ratio.
@@ -532,7 +528,8 @@ def _filter_innovations(
 ) -> tuple[FloatArray, FloatArray] | None:
     if not settings.consistency:
         return None
-    _, _, _, nu, S = solve_kalman(graph)
+    nu, S, _, _ = chain_innovations(graph.F, graph.g, graph.wq, graph.Hu, graph.zu, graph.wu,
+                                    graph.x0, np.diag(graph.sigma0**2), 2)  # fmt: skip
     return nu, S
 
 

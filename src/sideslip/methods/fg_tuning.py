@@ -201,6 +201,54 @@ def chain_kalman(
     return xs, vs, cs, nu, ss
 
 
+@numba.njit(cache=True)
+def chain_innovations(
+    F: FloatArray,
+    g: FloatArray,
+    wq: FloatArray,
+    Hu: FloatArray,
+    zu: FloatArray,
+    wu: FloatArray,
+    x0: FloatArray,
+    P0: FloatArray,
+    n_factors: int,
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+    """:func:`chain_kalman`'s innovations and their variances S of the first ``n_factors``
+    unary factors (N, n_factors; NaN where absent), computed by the same steps but without
+    storing the states (the consistency test needs only these).
+
+    Also returns the filter's prediction ``(x, P)`` for the row after the last one when ``F``
+    holds that step (``F.shape[0] >= N``: a chunk of a longer chain, continued by the next
+    call from that prediction), else the last row's filtered state.
+    """
+    n = Hu.shape[0]
+    M = Hu.shape[1]
+    nx = Hu.shape[2]
+    x = x0.copy()
+    P = P0.copy()
+    Q = np.zeros((nx, nx))
+    work = np.empty((2 * nx + 2, nx))
+    nu = np.full((n, n_factors), np.nan)
+    ss = np.full((n, n_factors), np.nan)
+    for k in range(n):
+        for m in range(M):
+            w = wu[k, m]
+            if w == 0.0:
+                continue
+            innov = zu[k, m]
+            for i in range(nx):
+                innov -= Hu[k, m, i] * x[i]
+            s = update_scalar_ws_nb(x, P, innov, Hu[k, m], 1.0 / w, work)
+            if m < n_factors:
+                ss[k, m] = s
+                nu[k, m] = innov
+        if k < F.shape[0]:
+            for i in range(nx):
+                Q[i, i] = 1.0 / wq[k, i]
+            predict_ws_nb(x, P, F[k], Q, g[k], work)
+    return nu, ss, x, P
+
+
 def choose_sigmas(
     fixed: Mapping[str, float | None],
     F: FloatArray,
