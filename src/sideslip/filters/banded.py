@@ -69,9 +69,9 @@ def assemble_chain(
     """
     N = Hu.shape[0]
     nx = Hu.shape[2]
-    ab = np.zeros((2 * nx, N * nx))
-    rhs = np.zeros(N * nx)
-    _assemble_into(ab, rhs, F, g, wq, Hu, zu, wu, Lam0, eta0)
+    ab = np.empty((2 * nx, N * nx))
+    rhs = np.empty(N * nx)
+    _assemble_into(ab, rhs, F, g, wq, Hu, zu, wu, Lam0, eta0)  # zeroes them first
     return ab, rhs
 
 
@@ -129,18 +129,21 @@ def _assemble_into(
             rhs[o1 + c] += w * g[k, c]
 
 
-def solve_chain(ab: FloatArray, rhs: FloatArray) -> tuple[FloatArray, FloatArray]:
+def solve_chain(
+    ab: FloatArray, rhs: FloatArray, overwrite: bool = False
+) -> tuple[FloatArray, FloatArray]:
     """Solve H x = rhs for SPD banded H; returns ``(x, cb)`` with cb the lower Cholesky band.
 
     The compiled :func:`cholesky_band` and its substitutions (the algorithm of LAPACK's
-    unblocked ``pbtf2``, which ``pbtrf`` uses at these bandwidths; no library call per column),
-    ``ab`` and ``rhs`` are left unchanged.  Raises ``numpy.linalg.LinAlgError`` if H is not
-    positive definite (an unobservable state: give every state a prior or a dynamic factor).
+    unblocked ``pbtf2``, which ``pbtrf`` uses at these bandwidths; no library call per column).
+    ``ab`` and ``rhs`` are left unchanged unless ``overwrite`` (then ``cb`` is ``ab`` and ``x``
+    is ``rhs``, no copies).  Raises ``numpy.linalg.LinAlgError`` if H is not positive definite
+    (an unobservable state: give every state a prior or a dynamic factor).
     """
-    cb = np.array(ab, dtype=float, order="C")
+    cb = ab if overwrite else np.array(ab, dtype=float, order="C")
     if not cholesky_band(cb):
         raise np.linalg.LinAlgError("banded normal matrix is not positive definite")
-    x = np.array(rhs, dtype=float)
+    x = rhs if overwrite else np.array(rhs, dtype=float)
     _solve_band_inplace(cb, x)
     return x, cb
 

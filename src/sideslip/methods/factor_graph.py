@@ -365,7 +365,7 @@ def solve_batch(graph: SideslipGraph) -> tuple[FloatArray, FloatArray, FloatArra
     beta-r covariance of each row; one banded Cholesky + selected inverse."""
     lam0, eta0 = graph.prior_information
     ab, rhs = assemble_chain(graph.F, graph.g, graph.wq, graph.Hu, graph.zu, graph.wu, lam0, eta0)
-    x, cb = solve_chain(ab, rhs)
+    x, cb = solve_chain(ab, rhs, overwrite=True)
     sb = selected_inverse(cb)
     return x.reshape(-1, 2), sb[0].reshape(-1, 2), sb[1].reshape(-1, 2)[:, 0].copy()
 

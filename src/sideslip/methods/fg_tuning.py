@@ -314,6 +314,43 @@ BLOCK_S = 0.25  # s: innovations are summed over blocks this long before the chi
 WINDOW_S = 2.0  # s: sliding window of the NIS test (8 blocks per factor)
 
 
+@numba.njit(cache=True)
+def _block_nis(
+    t: FloatArray, innov: FloatArray, S: FloatArray, block_s: float
+) -> tuple[NDArray[np.int64], FloatArray, FloatArray]:
+    """First row of each block (floor((t - t_0) / block_s)), and per block the NIS
+    sum over factors of (sum nu)^2 / sum S and its degrees of freedom (the factors with an
+    update in the block); one pass over the rows."""
+    n, n_fac = innov.shape
+    start = np.empty(n, dtype=np.int64)
+    nis = np.zeros(n)
+    dof = np.zeros(n)
+    sum_nu = np.zeros(n_fac)
+    sum_s = np.zeros(n_fac)
+    nb = 0
+    current = -1
+    for k in range(n + 1):
+        b = int(np.floor((t[k] - t[0]) / block_s)) if k < n else -2
+        if b != current:
+            if nb > 0:  # close the previous block
+                for m in range(n_fac):
+                    if sum_s[m] > 0.0:
+                        nis[nb - 1] += sum_nu[m] ** 2 / sum_s[m]
+                        dof[nb - 1] += 1.0
+                    sum_nu[m] = 0.0
+                    sum_s[m] = 0.0
+            if k == n:
+                break
+            start[nb] = k
+            nb += 1
+            current = b
+        for m in range(n_fac):
+            if np.isfinite(innov[k, m]) and np.isfinite(S[k, m]):
+                sum_nu[m] += innov[k, m]
+                sum_s[m] += S[k, m]
+    return start[:nb].copy(), nis[:nb].copy(), dof[:nb].copy()
+
+
 def block_consistency(
     t: FloatArray, innov: FloatArray, S: FloatArray, causal: bool, block_s: float = BLOCK_S
 ) -> Consistency:
@@ -329,20 +366,8 @@ def block_consistency(
     :func:`sideslip.filters.consistency.nis_consistency` over ``WINDOW_S`` windows (chi^2 99 %)
     at the blocks' start times, and its result is held over each block's rows.  O(N).
     """
-    n, n_fac = innov.shape
-    block = np.floor((t - t[0]) / block_s).astype(np.int64)
-    start = np.flatnonzero(np.r_[True, np.diff(block) != 0])
-    nis = np.zeros(start.size)
-    dof = np.zeros(start.size)
-    for m in range(n_fac):
-        ok = np.isfinite(innov[:, m]) & np.isfinite(S[:, m])
-        if not ok.any():
-            continue
-        sum_nu = np.add.reduceat(np.where(ok, innov[:, m], 0.0), start)
-        sum_s = np.add.reduceat(np.where(ok, S[:, m], 0.0), start)
-        has = sum_s > 0.0
-        nis += np.where(has, sum_nu**2 / np.where(has, sum_s, 1.0), 0.0)
-        dof += has
+    n = innov.shape[0]
+    start, nis, dof = _block_nis(t, innov, S, block_s)
     check = nis_consistency(t[start], nis, dof, window_s=WINDOW_S, causal=causal)
     rows = np.repeat(np.arange(start.size), np.diff(np.r_[start, n]))
     return Consistency(check.mean_nis[rows], check.inflation[rows], check.health[rows],
