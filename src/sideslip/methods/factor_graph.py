@@ -328,9 +328,14 @@ def _reweighted(unit: SideslipGraph, s: FactorGraphSettings, gap: NDArray[np.boo
     return replace(unit, sigma_q=sigma_q, sigma_u=sigma_u)
 
 
-def prepare(drive: Drive, vehicle: Vehicle, settings: FactorGraphSettings = DEFAULT_SETTINGS) -> Prepared:
+def prepare(
+    drive: Drive, vehicle: Vehicle, settings: FactorGraphSettings = DEFAULT_SETTINGS,
+    keep_graph: bool = True,
+) -> Prepared:
     """Inputs of ``drive`` and the sigmas of ``settings``: from the preset or set, or, for
-    "auto", identified from the drive (:func:`sideslip.methods.fg_tuning.choose_sigmas`)."""
+    "auto", identified from the drive (:func:`sideslip.methods.fg_tuning.choose_sigmas`);
+    with ``keep_graph`` the whole graph the tuning built, reweighted (fg_lag, which builds its
+    own chunks, does not keep it)."""
     inputs = graph_inputs(drive, vehicle, settings)
     fixed = settings.fixed_sigmas()
     if all(v is not None for v in fixed.values()):
@@ -346,7 +351,8 @@ def prepare(drive: Drive, vehicle: Vehicle, settings: FactorGraphSettings = DEFA
         np.diag(unit.sigma0**2), dt, ~inputs.low_speed, inputs.time_gap,
     )  # fmt: skip
     resolved = settings.with_sigmas(tuning.sigmas)
-    return Prepared(inputs, resolved, tuning, _reweighted(unit, resolved, inputs.time_gap))
+    graph = _reweighted(unit, resolved, inputs.time_gap) if keep_graph else None
+    return Prepared(inputs, resolved, tuning, graph)
 
 
 def sideslip_graph(
@@ -566,7 +572,7 @@ def fg_lag(
     """Fixed-lag factor-graph smoother: each row's state from the data up to ``window`` rows
     later (an on-line delay of window x dt), oldest state marginalised into the next prior.
     The "auto" sigmas are identified off-line from the whole drive (module fg_tuning)."""
-    prep = prepare(drive, vehicle, settings)
+    prep = prepare(drive, vehicle, settings, keep_graph=False)
     x, var, cov, inn = _lag_pass(prep.inputs, vehicle, prep.settings, LAG_CHUNK, settings.consistency)
     return _estimate(
         "fg_lag", drive, prep, inn, x, var, cov, settings, True,
