@@ -3,6 +3,10 @@
 Run:  .venv/bin/python benchmarks/factor_graph_accuracy.py [--quick]
 Writes benchmarks/results/factor_graph_accuracy.md.
 
+Speed of other commits:  ... factor_graph_accuracy.py --speed-trees before=/tmp/old/src now=src
+times the three methods (best of 3, wall and CPU seconds, untuned and "auto") with each tree's
+package on the same one-hour drive in a fresh process per tree, and prints a markdown table.
+
 Accuracy and honesty, before and after "auto": beta RMSE and the share of beta errors inside
 2 beta_std of the three methods on every scenario of benchmarks/compare_methods.py and on seed
 002's real lap (../shared/data/revs_250lm_20140222, when present), with the right vehicle file
@@ -244,11 +248,73 @@ def memory(name: str, rows: int) -> float:
     return float(json.loads(res.stdout.strip().splitlines()[-1])["peak_growth_mb"])
 
 
+# The child of --speed-trees: imports only what every tree since the seed-002 methods has
+# (FactorGraphSettings without presets before them: its default was the physics sigmas).
+SPEED_CHILD = """
+import json, sys, time
+import numpy as np
+from sideslip.drive import drive_from_columns
+from sideslip.vehicle import load_vehicle
+from sideslip.methods import factor_graph as fgm
+z = np.load(sys.argv[1])
+drive = drive_from_columns({k: z[k] for k in z.files}, {})
+vehicle = load_vehicle(sys.argv[2])
+try:
+    untuned = fgm.FactorGraphSettings(preset="physics")
+except TypeError:
+    untuned = fgm.FactorGraphSettings()
+out = {}
+for mode, settings in (("untuned", untuned), ("auto", fgm.FactorGraphSettings())):
+    for name in ("kf_linear", "fg_lag", "fg_batch"):
+        f = getattr(fgm, name)
+        f(drive.slice(0, 6000), vehicle, settings)
+        wall = cpu = float("inf")
+        for _ in range(3):
+            t0, c0 = time.perf_counter(), time.process_time()
+            f(drive, vehicle, settings)
+            wall = min(wall, time.perf_counter() - t0)
+            cpu = min(cpu, time.process_time() - c0)
+        out[mode + " " + name] = [wall, cpu]
+print(json.dumps(out))
+"""
+
+
+def speed_trees(trees: list[str]) -> None:
+    """Print best-of-3 seconds of the three methods for each ``label=src`` package tree."""
+    import os
+    import tempfile
+
+    drive, vehicle = hour_drive(HOUR_ROWS)
+    with tempfile.TemporaryDirectory() as tmp:
+        npz = Path(tmp) / "hour.npz"
+        np.savez(npz, t=drive.t, **{c: drive[c] for c in INPUT_COLUMNS if c in drive})
+        results = {}
+        for item in trees:
+            label, src = item.split("=", 1)
+            env = {**os.environ, "PYTHONPATH": str(Path(src).resolve()), "OMP_NUM_THREADS": "1"}
+            run = subprocess.run([sys.executable, "-c", SPEED_CHILD, str(npz), vehicle.source.removeprefix("preset:")],
+                                 env=env, capture_output=True, text=True, check=True)  # fmt: skip
+            results[label] = json.loads(run.stdout.strip().splitlines()[-1])
+    print("| path | method | " + " | ".join(f"{lb} s (CPU s)" for lb in results) + " | samples/s (last) |")
+    print("|---|---|" + "---:|" * (len(results) + 1))
+    for key in next(iter(results.values())):
+        mode, name = key.split()
+        cells = [f"{r[key][0]:.3f} ({r[key][1]:.3f})" if key in r else "-" for r in results.values()]
+        last = list(results.values())[-1].get(key)
+        rate = f"{HOUR_ROWS / last[0]:,.0f}" if last else "-"
+        print(f"| {mode} | {name} | " + " | ".join(cells) + f" | {rate} |")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="one seed, no memory runs")
     parser.add_argument("--memory-child", nargs=2, help=argparse.SUPPRESS)
+    parser.add_argument("--speed-trees", nargs="+", metavar="LABEL=SRC",
+                        help="only time the methods of these package trees (src folders)")
     args = parser.parse_args()
+    if args.speed_trees:
+        speed_trees(args.speed_trees)
+        return
     if args.memory_child:
         memory_child(args.memory_child[0], int(args.memory_child[1]))
         return

@@ -105,6 +105,18 @@ def test_numba_cholesky_equals_lapack_and_solves():
     np.testing.assert_allclose(solve_band(cb, rhs), np.linalg.solve(H, b), rtol=1e-10, atol=1e-10)
 
 
+def test_solve_chain_in_place_gives_the_same_solution_and_reuses_the_arrays():
+    rng = np.random.default_rng(9)
+    ab, rhs = assemble_chain(*_random_chain(rng, 20, 2, 3))
+    x, cb = solve_chain(ab.copy(), rhs.copy())
+    ab2, rhs2 = ab.copy(), rhs.copy()
+    x2, cb2 = solve_chain(ab2, rhs2, overwrite=True)
+    assert cb2 is ab2 and x2 is rhs2
+    np.testing.assert_array_equal(x2, x)
+    np.testing.assert_array_equal(cb2, cb)
+    np.testing.assert_allclose(cb, cholesky_banded(ab, lower=True), rtol=1e-12, atol=1e-12)
+
+
 def test_numba_cholesky_reports_an_indefinite_matrix():
     ab = np.array([[1.0, -1.0], [0.0, 0.0]])  # diag(1, -1)
     assert not cholesky_band(ab)

@@ -153,6 +153,23 @@ def test_fixed_lag_streamed_in_small_chunks_equals_one_chunk():
     np.testing.assert_allclose(v_small, v_one, rtol=1e-9, atol=1e-15)
 
 
+def test_fixed_lag_consistency_filter_from_its_chunks_equals_one_filter_pass():
+    # fg_lag's health comes from the graph's Kalman innovations, computed on the fixed-lag
+    # chunks' own factors (no second graph of the drive): the same numbers as one pass of the
+    # filter over the whole graph, however the drive is chunked.
+    from sideslip.methods.factor_graph import _lag_pass, prepare, solve_kalman
+
+    drive = _awkward_drive()
+    prep = prepare(drive, VEHICLE, FactorGraphSettings(preset="physics"))
+    _, _, _, nu_ref, s_ref = solve_kalman(sideslip_graph(drive, VEHICLE, prep.settings))
+    for chunk in (37, 1000, len(drive)):
+        _, _, _, inn = _lag_pass(prep.inputs, VEHICLE, prep.settings, chunk, True)
+        assert inn is not None
+        np.testing.assert_array_equal(inn[0], nu_ref[:, :2])
+        np.testing.assert_array_equal(inn[1], s_ref[:, :2])
+    assert _lag_pass(prep.inputs, VEHICLE, prep.settings, 37, False)[3] is None
+
+
 def test_fixed_lag_with_no_window_is_the_kalman_filter():
     drive, _ = _linear_drive(0.005, 0.05, n=800)
     kf = kf_linear(drive, VEHICLE)

@@ -17,13 +17,13 @@ O(N nx p).
 Functions
 ---------
 * :func:`assemble_chain` -- the normal equations (band + right-hand side), numba-compiled.
-* :func:`solve_chain` -- banded Cholesky (LAPACK ``pbtrf`` through scipy) and the solution.
+* :func:`solve_chain` -- banded Cholesky (compiled, LAPACK's ``pbtf2`` algorithm) and the solution.
 * :func:`selected_inverse` -- the band of H^{-1} (Takahashi et al. 1973 recursion on the
   Cholesky factor), giving marginal covariances without a dense inverse.
-* :func:`fixed_lag_chain` -- a fixed-lag smoother on the same factors: a sliding window whose
-  oldest state is marginalised exactly (Schur complement) into the next window's prior, so
-  memory is constant in N.
-* :func:`cholesky_band`, :func:`solve_band` -- the numba banded Cholesky used inside windows.
+* :func:`fixed_lag_chain` -- a fixed-lag smoother on the same factors: a sliding window
+  reduced onto its first state by block elimination from its far end, whose oldest state is
+  then marginalised exactly (Schur complement) into the next window's prior.
+* :func:`cholesky_band`, :func:`solve_band` -- the numba banded Cholesky (whole chains and windows).
 
 Prior convention: the prior is given in information form ``(Lam0, eta0)`` with
 ``eta0 = Lam0 x0``; this is what marginalisation produces.
@@ -34,7 +34,6 @@ from __future__ import annotations
 import numba
 import numpy as np
 from numpy.typing import NDArray
-from scipy.linalg import cho_solve_banded, cholesky_banded
 
 FloatArray = NDArray[np.float64]
 
@@ -70,9 +69,9 @@ def assemble_chain(
     """
     N = Hu.shape[0]
     nx = Hu.shape[2]
-    ab = np.zeros((2 * nx, N * nx))
-    rhs = np.zeros(N * nx)
-    _assemble_into(ab, rhs, F, g, wq, Hu, zu, wu, Lam0, eta0)
+    ab = np.empty((2 * nx, N * nx))
+    rhs = np.empty(N * nx)
+    _assemble_into(ab, rhs, F, g, wq, Hu, zu, wu, Lam0, eta0)  # zeroes them first
     return ab, rhs
 
 
@@ -130,15 +129,23 @@ def _assemble_into(
             rhs[o1 + c] += w * g[k, c]
 
 
-def solve_chain(ab: FloatArray, rhs: FloatArray) -> tuple[FloatArray, FloatArray]:
+def solve_chain(
+    ab: FloatArray, rhs: FloatArray, overwrite: bool = False
+) -> tuple[FloatArray, FloatArray]:
     """Solve H x = rhs for SPD banded H; returns ``(x, cb)`` with cb the lower Cholesky band.
 
-    Raises ``numpy.linalg.LinAlgError`` if H is not positive definite (an unobservable state:
-    give every state a prior or a dynamic factor).
+    The compiled :func:`cholesky_band` and its substitutions (the algorithm of LAPACK's
+    unblocked ``pbtf2``, which ``pbtrf`` uses at these bandwidths; no library call per column).
+    ``ab`` and ``rhs`` are left unchanged unless ``overwrite`` (then ``cb`` is ``ab`` and ``x``
+    is ``rhs``, no copies).  Raises ``numpy.linalg.LinAlgError`` if H is not positive definite
+    (an unobservable state: give every state a prior or a dynamic factor).
     """
-    cb = cholesky_banded(ab, lower=True, check_finite=False)
-    x = cho_solve_banded((cb, True), rhs, check_finite=False)
-    return np.asarray(x, dtype=float), np.asarray(cb, dtype=float)
+    cb = ab if overwrite else np.array(ab, dtype=float, order="C")
+    if not cholesky_band(cb):
+        raise np.linalg.LinAlgError("banded normal matrix is not positive definite")
+    x = rhs if overwrite else np.array(rhs, dtype=float)
+    _solve_band_inplace(cb, x)
+    return x, cb
 
 
 @numba.njit(cache=True)
@@ -244,13 +251,17 @@ def fixed_lag_chain(
     """Fixed-lag smoother on the chain problem: state k estimated from the data up to k + lag.
 
     A window holds the states s .. s+lag (``lag`` dynamic steps, as the paper's window of 5
-    samples after its prior block).  At each step the window's normal equations (prior on x_s
-    plus all factors inside the window) are solved by banded Cholesky; x_s is output, then
-    marginalised out exactly: the factors touching x_s (its prior, its unary factors, the
-    dynamic factor s -> s+1) are reduced by a Schur complement to a Gaussian prior
-    ``(Lam, eta)`` on x_{s+1}.  Since the problem is linear, this equals the batch solution of
-    the data up to s + lag; lag = 0 is the Kalman filter, lag >= N-1 the batch smoother.
-    Memory is O(lag) besides the inputs/outputs.
+    samples after its prior block), with the prior on x_s and all factors inside the window.
+    Its normal equations are block tridiagonal; they are reduced onto x_s by eliminating the
+    window's states from its far end, x_{s+lag} .. x_{s+1} (block Gaussian elimination, each
+    step a Schur complement of an nx x nx block), which leaves the marginal information of
+    x_s: its mean and marginal covariance, with no full solve or selected inverse of the
+    window.  Then x_s is marginalised out exactly: the factors touching it (its prior, its
+    unary factors, the dynamic factor s -> s+1) are reduced by a Schur complement to a
+    Gaussian prior ``(Lam, eta)`` on x_{s+1}.  Since the problem is linear, this equals the
+    batch solution of the data up to s + lag; lag = 0 is the Kalman filter, lag >= N-1 the
+    batch smoother.  Each factor's information blocks are formed once per row, so a window
+    costs O(lag nx^3).  Memory is O(N nx^2) for those blocks besides the inputs/outputs.
 
     Streaming: with ``n_out`` < N only the first ``n_out`` states are output (the inputs must
     then reach max(lag, 1) rows beyond them, or the end of the drive), and the returned prior
@@ -268,45 +279,114 @@ def fixed_lag_chain(
     nx = Hu.shape[2]
     if n_out < 0 or n_out > N:
         n_out = N
-    p = 2 * nx - 1
     x_out = np.zeros((n_out, nx))
     var_out = np.zeros((n_out, nx))
     cov_out = np.zeros((n_out, max(nx - 1, 0)))
     Lam = Lam0.copy()
     eta = eta0.copy()
-    size = -1
-    ab = np.zeros((p + 1, 0))
-    rhs = np.zeros(0)
-    sb = np.zeros((p + 1, 0))
+    # information blocks of each row's factors, for the rows the windows reach
+    last = min(N - 1, n_out - 1 + lag)
+    U = np.zeros((last + 1, nx, nx))  # unary: sum_m w h h'
+    u = np.zeros((last + 1, nx))  # sum_m w h z
+    for k in range(last + 1):
+        for m in range(M):
+            w = wu[k, m]
+            if w == 0.0:
+                continue
+            for i in range(nx):
+                u[k, i] += w * Hu[k, m, i] * zu[k, m]
+                for j in range(nx):
+                    U[k, i, j] += w * Hu[k, m, i] * Hu[k, m, j]
+    nd = min(N - 1, max(last, n_out))  # dynamic factors: the windows' and x_s's marginalisation
+    WF = np.zeros((nd, nx, nx))  # dynamic k -> k+1: W F (the coupling is -W F)
+    FWF = np.zeros((nd, nx, nx))  # F' W F on x_k
+    Wg = np.zeros((nd, nx))  # W g on x_{k+1}
+    FWg = np.zeros((nd, nx))  # F' W g on x_k (enters with a minus sign)
+    for k in range(nd):
+        for c in range(nx):
+            Wg[k, c] = wq[k, c] * g[k, c]
+            for i in range(nx):
+                WF[k, c, i] = wq[k, c] * F[k, c, i]
+        for i in range(nx):
+            acc = 0.0
+            for c in range(nx):
+                acc += F[k, c, i] * Wg[k, c]
+            FWg[k, i] = acc
+            for j in range(nx):
+                acc = 0.0
+                for c in range(nx):
+                    acc += F[k, c, i] * WF[k, c, j]
+                FWF[k, i, j] = acc
+    A = np.zeros((nx, nx))
+    r = np.zeros(nx)
+    X = np.zeros((nx, nx))
     A11 = np.zeros((nx, nx))
     b1 = np.zeros(nx)
-    WF = np.zeros((nx, nx))  # W F_s
-    X = np.zeros((nx, nx))  # A11^-1 (W F_s)'
     for s in range(n_out):
         e = min(s + lag, N - 1)
-        nw = (e - s + 1) * nx
-        if nw != size:  # only when the window shrinks at the end of the data
-            size = nw
-            ab = np.zeros((p + 1, nw))
-            rhs = np.zeros(nw)
-            sb = np.zeros((p + 1, nw))
-        _assemble_into(
-            ab, rhs, F[s:e], g[s:e], wq[s:e], Hu[s : e + 1], zu[s : e + 1], wu[s : e + 1],
-            Lam, eta,
-        )  # fmt: skip
-        if not cholesky_band(ab):
-            for r in range(s, n_out):
-                x_out[r] = x_out[max(s - 1, 0)]
-                var_out[r] = var_out[max(s - 1, 0)]
-                cov_out[r] = cov_out[max(s - 1, 0)]
-            return x_out, var_out, cov_out, False, Lam, eta
-        _solve_band_inplace(ab, rhs)
-        _selected_inverse_into(ab, sb)
+        # the window's far end: unary factors of x_e and the dynamic factor into it
         for i in range(nx):
-            x_out[s, i] = rhs[i]
-            var_out[s, i] = sb[0, i]
+            r[i] = u[e, i]
+            for j in range(nx):
+                A[i, j] = U[e, i, j]
+        if e > s:
+            for i in range(nx):
+                A[i, i] += wq[e - 1, i]
+                r[i] += Wg[e - 1, i]
+        else:
+            for i in range(nx):
+                r[i] += eta[i]
+                for j in range(nx):
+                    A[i, j] += Lam[i, j]
+        good = True
+        for j in range(e, s, -1):
+            # eliminate x_j onto x_{j-1}: coupling H[x_j, x_{j-1}] = -W F_{j-1}
+            d = j - 1
+            for i in range(nx):
+                for c in range(nx):
+                    X[i, c] = WF[d, i, c]
+            if not _small_spd_solve(A, X, r):  # X <- A^-1 W F, r <- A^-1 r
+                good = False
+                break
+            for i in range(nx):
+                acc = u[d, i] - FWg[d, i]
+                for c in range(nx):
+                    acc += WF[d, c, i] * r[c]
+                b1[i] = acc
+                for q in range(nx):
+                    acc = U[d, i, q] + FWF[d, i, q]
+                    for c in range(nx):
+                        acc -= WF[d, c, i] * X[c, q]
+                    A11[i, q] = acc
+            if d > s:  # the dynamic factor into x_{j-1}, else the prior on x_s
+                for i in range(nx):
+                    A11[i, i] += wq[d - 1, i]
+                    b1[i] += Wg[d - 1, i]
+            else:
+                for i in range(nx):
+                    b1[i] += eta[i]
+                    for q in range(nx):
+                        A11[i, q] += Lam[i, q]
+            for i in range(nx):
+                r[i] = b1[i]
+                for q in range(nx):
+                    A[i, q] = 0.5 * (A11[i, q] + A11[q, i])
+        if good:  # marginal of x_s: mean A^-1 r, covariance A^-1
+            for i in range(nx):
+                for c in range(nx):
+                    X[i, c] = 1.0 if i == c else 0.0
+            good = _small_spd_solve(A, X, r)
+        if not good:
+            for k in range(s, n_out):
+                x_out[k] = x_out[max(s - 1, 0)]
+                var_out[k] = var_out[max(s - 1, 0)]
+                cov_out[k] = cov_out[max(s - 1, 0)]
+            return x_out, var_out, cov_out, False, Lam, eta
+        for i in range(nx):
+            x_out[s, i] = r[i]
+            var_out[s, i] = X[i, i]
         for i in range(nx - 1):
-            cov_out[s, i] = sb[1, i]
+            cov_out[s, i] = 0.5 * (X[i + 1, i] + X[i, i + 1])
         if s == N - 1:
             break
         # Marginalise x_s: information of (x_s, x_{s+1}) from the factors touching x_s:
@@ -314,49 +394,28 @@ def fixed_lag_chain(
         #   b1  = eta + sum w h z - F' W g,   b2  = W g
         # -> prior on x_{s+1}:  Lam' = W - (W F) A11^-1 (W F)',  eta' = W g + (W F) A11^-1 b1
         for i in range(nx):
-            b1[i] = eta[i]
+            b1[i] = eta[i] + u[s, i] - FWg[s, i]
             for j in range(nx):
-                A11[i, j] = Lam[i, j]
-        for m in range(M):
-            w = wu[s, m]
-            if w == 0.0:
-                continue
-            for i in range(nx):
-                b1[i] += w * Hu[s, m, i] * zu[s, m]
-                for j in range(nx):
-                    A11[i, j] += w * Hu[s, m, i] * Hu[s, m, j]
-        for c in range(nx):
-            for i in range(nx):
-                WF[c, i] = wq[s, c] * F[s, c, i]
-        for i in range(nx):
-            for j in range(nx):
-                acc = 0.0
-                for c in range(nx):
-                    acc += F[s, c, i] * WF[c, j]
-                A11[i, j] += acc
-            acc = 0.0
-            for c in range(nx):
-                acc += WF[c, i] * g[s, c]
-            b1[i] -= acc
+                A11[i, j] = Lam[i, j] + U[s, i, j] + FWF[s, i, j]
         # solve A11 [X | y] = [(W F)' | b1] by a small dense Cholesky (A11 is SPD)
         for i in range(nx):
             for j in range(nx):
-                X[i, j] = WF[j, i]
+                X[i, j] = WF[s, j, i]
         if not _small_spd_solve(A11, X, b1):
-            for r in range(s + 1, n_out):
-                x_out[r] = x_out[s]
-                var_out[r] = var_out[s]
-                cov_out[r] = cov_out[s]
+            for k in range(s + 1, n_out):
+                x_out[k] = x_out[s]
+                var_out[k] = var_out[s]
+                cov_out[k] = cov_out[s]
             return x_out, var_out, cov_out, False, Lam, eta
         for i in range(nx):
-            acc = wq[s, i] * g[s, i]
+            acc = Wg[s, i]
             for c in range(nx):
-                acc += WF[i, c] * b1[c]
+                acc += WF[s, i, c] * b1[c]
             eta[i] = acc
             for j in range(i + 1):
                 acc = 0.0
                 for c in range(nx):
-                    acc += WF[i, c] * X[c, j]
+                    acc += WF[s, i, c] * X[c, j]
                 v = (wq[s, i] if i == j else 0.0) - acc
                 Lam[i, j] = v
                 Lam[j, i] = v

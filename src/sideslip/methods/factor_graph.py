@@ -42,14 +42,15 @@ tested).  On-line this is an output delay of window x dt (50 ms at 100 Hz).  The
 streamed in chunks of ``LAG_CHUNK`` rows, so the working memory does not grow with the drive.
 Both use the same settings here (the paper tuned its KF and FG differently, its Section 4).
 
-Noise settings (:class:`FactorGraphSettings`): ``preset`` "auto" (default) identifies the a_y
-and beta-model sigmas from the drive (:mod:`sideslip.methods.fg_tuning`: least error of the
-gyro predicted 0.3 s ahead), "paper" is the authors' published set, "physics" fixed values
-argued in the dataclass; explicit values override.  Model sigmas are per ``reference_dt``
-step and scale with sqrt(dt/reference_dt).  Honest 1-sigma: block sums of the graph's Kalman
-innovations over 2 s windows inflate the variance where the model stops fitting (``health``),
-and a vehicle file's stiffness error, which no test on the drive can see, adds
-(``stiffness_rel_sigma`` x slip angle)^2 to beta's variance.
+Noise settings (:class:`~sideslip.methods.fg_settings.FactorGraphSettings`, in its own module):
+``preset`` "auto" (default) identifies the a_y and beta-model sigmas from the drive
+(:mod:`sideslip.methods.fg_tuning`: least error of the gyro predicted 0.3 s ahead), "paper" is
+the authors' published set, "physics" fixed values argued in the dataclass; explicit values
+override. Model sigmas are per ``reference_dt`` step and scale with sqrt(dt/reference_dt).
+Honest 1-sigma: block sums of the graph's Kalman innovations over 2 s windows inflate the
+variance where the model stops fitting (``health``), and a vehicle file's stiffness error,
+which no test on the drive can see, adds (``stiffness_rel_sigma`` x slip angle)^2 to beta's
+variance.
 
 Accelerometer.  The paper uses the lateral accelerometer raw; so do we.  It reads specific
 force: the tyre forces over m plus g sin(suspension roll).  The model's right side C x + D delta
@@ -76,9 +77,8 @@ them and the 1-sigma grows.
 
 from __future__ import annotations
 
-import math
 from dataclasses import asdict, dataclass, replace
-from typing import Any, Literal
+from functools import cached_property
 
 import numpy as np
 from numpy.typing import NDArray
@@ -86,13 +86,15 @@ from numpy.typing import NDArray
 from sideslip.drive import Drive
 from sideslip.estimate import Estimate
 from sideslip.filters.banded import assemble_chain, fixed_lag_chain, selected_inverse, solve_chain
+from sideslip.methods.fg_kernels import chain_factors, one_sigma
+from sideslip.methods.fg_settings import DEFAULT_SETTINGS, FactorGraphSettings
 from sideslip.methods.fg_tuning import (
     BLOCK_S,
-    PRESETS,
     SIGMA_FIELDS,
     WINDOW_S,
     Tuning,
     block_consistency,
+    chain_innovations,
     chain_kalman,
     choose_sigmas,
 )
@@ -108,118 +110,6 @@ COLUMNS = ("wz", "ay", "steer", SPEED)
 VEHICLE_PARAMS = ("mass", "yaw_inertia", "lf", "lr", "cf", "cr")
 
 
-Preset = Literal["auto", "paper", "physics"]
-
-
-@dataclass(frozen=True)
-class FactorGraphSettings:
-    """Sigmas (1-sigma of each factor's residual) and options of the seed-002 graph.
-
-    The four sigmas come from ``preset`` unless set explicitly (an explicit value overrides
-    the preset):
-
-    * ``"auto"`` (default): ``lateral_acceleration`` and ``model_beta`` identified from the
-      drive (:mod:`sideslip.methods.fg_tuning`: least error of the gyro predicted 0.3 s ahead),
-      ``yaw_rate`` and ``model_yaw_rate`` from ``"physics"``;
-    * ``"paper"``: the seed-002 authors' values (beta dynamic 4e-3, yaw-rate dynamic 0.9e-2,
-      yaw-rate observation 1e-2, lateral acceleration 7; their code's defaults);
-    * ``"physics"``: the fixed values argued below (this package's earlier default).
-
-    Attributes
-    ----------
-    preset : "auto", "paper" or "physics" (above).
-    yaw_rate : rad/s.  Yaw-rate factor r_k = wz_k: MEMS gyro white noise (~0.005 rad/s at
-        100 Hz) plus an uncompensated bias of the same order; physics 0.01.
-    lateral_acceleration : m/s^2.  a_y factor: accelerometer noise (~0.05 m/s^2) is small
-        against the linear-tyre model error near the grip limit (~0.5 m/s^2 at 0.6 g with
-        tyres 10 % past linear) and the suspension-roll term (~5 % of a_y); physics 0.5.
-    model_beta : rad per ``reference_dt`` step.  beta dynamic factor: an error of 1 m/s^2 in
-        the modelled tyre force per mass at 10 m/s is 0.1 rad/s of beta rate, 0.001 rad/step.
-    model_yaw_rate : rad/s per ``reference_dt`` step.  r dynamic factor: a yaw-moment error of
-        ~1000 N m on Iz ~ 1000 kg m^2 is 1 rad/s^2, 0.01 rad/s per step.
-    prior_beta : rad.  Prior on beta_0 = 0: drives start near straight running; 3 deg.
-    prior_yaw_rate : rad/s.  Prior on r_0 = 0; the first gyro sample overrides it.
-    reference_dt : s.  Step at which the model sigmas are quoted (sigma ~ sqrt(dt)).
-    speed_gate : m/s.  Below it (and reversing) the low-speed handling of the module docstring.
-    low_speed_beta : rad.  Sigma of the low-speed kinematic pseudo-measurement on beta.
-    low_speed_inflation : factor on the model sigmas below the speed gate.
-    window : samples.  fg_lag's window: the dynamic steps after the prior block (paper: 5).
-    max_step : s.  A time step longer than this (a gap in the recording) carries no model
-        information: the dynamic factor across it becomes a fresh prior (restart).
-    consistency : inflate the 1-sigma where the windowed NIS of the factors' residuals exceeds
-        its chi^2 bound (:mod:`sideslip.filters.consistency`), and report ``health``.
-    stiffness_rel_sigma : 1-sigma relative error of the vehicle file's cornering stiffness,
-        added to beta's variance as (stiffness_rel_sigma x the larger axle slip angle)^2.  A stiffness
-        scaled by s moves the slip angle inferred from a force by (1 - 1/s) of itself, the same
-        for the whole graph, so neither the innovations nor any other test on the drive can see
-        it (measured: a file 30 % low leaves the windowed NIS inside its bound).  Users' files
-        are 20-35 % off (nominal tyre data against the effective axle stiffness): 0.3 makes a
-        file 30 % off a 1-sigma error.  0 trusts the file.
-    """
-
-    preset: Preset = "auto"
-    yaw_rate: float | None = None
-    lateral_acceleration: float | None = None
-    model_beta: float | None = None
-    model_yaw_rate: float | None = None
-    prior_beta: float = 0.05
-    prior_yaw_rate: float = 0.05
-    reference_dt: float = 0.01
-    speed_gate: float = 3.0
-    low_speed_beta: float = 0.02
-    low_speed_inflation: float = 10.0
-    window: int = 5
-    max_step: float = 0.25
-    consistency: bool = True
-    stiffness_rel_sigma: float = 0.3
-
-    def __post_init__(self) -> None:
-        if self.preset not in ("auto", *PRESETS):
-            raise ValueError(
-                f"FactorGraphSettings.preset = {self.preset!r}: expected 'auto', "
-                + ", ".join(repr(p) for p in PRESETS)
-            )
-        for name in (
-            *SIGMA_FIELDS, "prior_beta", "prior_yaw_rate", "reference_dt", "speed_gate",
-            "low_speed_beta", "low_speed_inflation", "max_step",
-        ):  # fmt: skip
-            value = getattr(self, name)
-            if value is None and name in SIGMA_FIELDS:
-                continue
-            if isinstance(value, bool) or not (
-                isinstance(value, int | float) and math.isfinite(value) and value > 0
-            ):
-                raise ValueError(f"FactorGraphSettings.{name} = {value!r}: expected a number > 0")
-        if not (math.isfinite(self.stiffness_rel_sigma) and 0 <= self.stiffness_rel_sigma < 1):
-            raise ValueError(
-                f"FactorGraphSettings.stiffness_rel_sigma = {self.stiffness_rel_sigma!r}: "
-                "expected a number in [0, 1)"
-            )
-        if int(self.window) != self.window or self.window < 0:
-            raise ValueError(
-                f"FactorGraphSettings.window = {self.window!r}: expected an integer >= 0"
-            )
-
-    def fixed_sigmas(self) -> dict[str, float | None]:
-        """Each sigma as set or given by a named preset; None where "auto" identifies it."""
-        table = PRESETS.get(self.preset, {})
-        return {k: getattr(self, k) if getattr(self, k) is not None else table.get(k)
-                for k in SIGMA_FIELDS}  # fmt: skip
-
-    def with_sigmas(self, sigmas: dict[str, float]) -> FactorGraphSettings:
-        """These settings with all four sigmas given."""
-        changes: dict[str, Any] = {k: float(sigmas[k]) for k in SIGMA_FIELDS}
-        return replace(self, **changes)
-
-    def sigma(self, name: str) -> float:
-        """A sigma of resolved settings (:meth:`with_sigmas`); ValueError if still unset."""
-        value = getattr(self, name)
-        if value is None:
-            raise ValueError(f"FactorGraphSettings.{name} is not resolved (preset 'auto')")
-        return float(value)
-
-
-DEFAULT_SETTINGS = FactorGraphSettings()
 LAG_CHUNK = 4096  # rows per chunk of the streamed fixed-lag smoother
 
 
@@ -243,12 +133,12 @@ class SideslipGraph:
     sigma0: FloatArray
     low_speed: NDArray[np.bool_]
 
-    @property
+    @cached_property
     def wq(self) -> FloatArray:
-        """Weights 1/sigma^2 of the dynamic factors, (N-1, 2)."""
+        """Weights 1/sigma^2 of the dynamic factors, (N-1, 2) (computed once per graph)."""
         return np.asarray(1.0 / self.sigma_q**2, dtype=float)
 
-    @property
+    @cached_property
     def wu(self) -> FloatArray:
         """Weights 1/sigma^2 of the unary factors, (N, 3); 0 where a factor is absent."""
         with np.errstate(divide="ignore"):
@@ -316,42 +206,24 @@ def build_graph(
     n = t.size
     delta = inputs.delta[sl]
     low = inputs.low_speed[sl]
-    A, B, _, _ = continuous_arrays(vehicle, inputs.v_dynamics[sl], v_min=settings.speed_gate)
-    _, _, C, D = continuous_arrays(vehicle, inputs.v_measurement[sl], v_min=settings.speed_gate)
+    # one model evaluation at the a_y factor's speed; the dynamics' (clamped higher only where
+    # forward Euler needs it, module docstring) re-evaluated on those few rows
+    v_dyn = inputs.v_dynamics[sl]
+    A, B, C, D = continuous_arrays(vehicle, inputs.v_measurement[sl], v_min=settings.speed_gate)
+    faster = np.flatnonzero(v_dyn != inputs.v_measurement[sl])
+    if faster.size:
+        A[faster], B[faster], _, _ = continuous_arrays(vehicle, v_dyn[faster], v_min=settings.speed_gate)
 
-    dt = np.diff(t)
-    F = np.eye(2)[None, :, :] + dt[:, None, None] * A[:-1]
-    g = dt[:, None] * B[:-1, :, 0] * delta[:-1, None]
-    scale = np.sqrt(dt / settings.reference_dt)
-    sigma_q = np.empty((n - 1, 2))
-    sigma_q[:, 0] = settings.sigma("model_beta") * scale
-    sigma_q[:, 1] = settings.sigma("model_yaw_rate") * scale
-    sigma_q[low[:-1]] *= settings.low_speed_inflation
-    # a time gap restarts the chain: no dynamics across it, the prior's sigmas instead
     gap = inputs.time_gap[start : start + n - 1]
-    F[gap] = 0.0
-    g[gap] = 0.0
-    sigma_q[gap] = (settings.prior_beta, settings.prior_yaw_rate)
-
-    wz = inputs.wz[sl]
-    ay = inputs.ay[sl]
-    Hu = np.zeros((n, 3, 2))
-    zu = np.zeros((n, 3))
-    sigma_u = np.full((n, 3), np.inf)
-    # yaw rate (unary on r_k)
-    Hu[:, 0, 1] = 1.0
-    ok = np.isfinite(wz)
-    zu[ok, 0] = wz[ok]
-    sigma_u[ok, 0] = settings.sigma("yaw_rate")
-    # lateral acceleration (binary on beta_k, r_k), above the speed gate only
-    Hu[:, 1, :] = C[:, 1, :]
-    ok = np.isfinite(ay) & ~low
-    zu[ok, 1] = ay[ok] - D[ok, 1, 0] * delta[ok]
-    sigma_u[ok, 1] = settings.sigma("lateral_acceleration")
+    sigmas = np.array([settings.sigma(k) for k in ("model_beta", "model_yaw_rate", "yaw_rate",
+                                                   "lateral_acceleration")])  # fmt: skip
+    F, g, sigma_q, Hu, zu, sigma_u = chain_factors(
+        t, A, B, C, D, delta, low, gap, inputs.wz[sl], inputs.ay[sl], sigmas,
+        settings.reference_dt, settings.low_speed_inflation, settings.prior_beta,
+        settings.prior_yaw_rate, settings.low_speed_beta,
+    )  # fmt: skip
     # low-speed kinematic sideslip (unary on beta_k)
-    Hu[:, 2, 0] = 1.0
     zu[low, 2] = np.arctan(vehicle.lr * np.tan(np.clip(delta[low], -1.2, 1.2)) / vehicle.wheelbase)
-    sigma_u[low, 2] = settings.low_speed_beta
     return SideslipGraph(
         F=np.ascontiguousarray(F),
         g=np.ascontiguousarray(g),
@@ -388,9 +260,14 @@ def _reweighted(unit: SideslipGraph, s: FactorGraphSettings, gap: NDArray[np.boo
     return replace(unit, sigma_q=sigma_q, sigma_u=sigma_u)
 
 
-def prepare(drive: Drive, vehicle: Vehicle, settings: FactorGraphSettings = DEFAULT_SETTINGS) -> Prepared:
+def prepare(
+    drive: Drive, vehicle: Vehicle, settings: FactorGraphSettings = DEFAULT_SETTINGS,
+    keep_graph: bool = True,
+) -> Prepared:
     """Inputs of ``drive`` and the sigmas of ``settings``: from the preset or set, or, for
-    "auto", identified from the drive (:func:`sideslip.methods.fg_tuning.choose_sigmas`)."""
+    "auto", identified from the drive (:func:`sideslip.methods.fg_tuning.choose_sigmas`);
+    with ``keep_graph`` the whole graph the tuning built, reweighted (fg_lag, which builds its
+    own chunks, does not keep it)."""
     inputs = graph_inputs(drive, vehicle, settings)
     fixed = settings.fixed_sigmas()
     if all(v is not None for v in fixed.values()):
@@ -406,7 +283,8 @@ def prepare(drive: Drive, vehicle: Vehicle, settings: FactorGraphSettings = DEFA
         np.diag(unit.sigma0**2), dt, ~inputs.low_speed, inputs.time_gap,
     )  # fmt: skip
     resolved = settings.with_sigmas(tuning.sigmas)
-    return Prepared(inputs, resolved, tuning, _reweighted(unit, resolved, inputs.time_gap))
+    graph = _reweighted(unit, resolved, inputs.time_gap) if keep_graph else None
+    return Prepared(inputs, resolved, tuning, graph)
 
 
 def sideslip_graph(
@@ -425,7 +303,7 @@ def solve_batch(graph: SideslipGraph) -> tuple[FloatArray, FloatArray, FloatArra
     beta-r covariance of each row; one banded Cholesky + selected inverse."""
     lam0, eta0 = graph.prior_information
     ab, rhs = assemble_chain(graph.F, graph.g, graph.wq, graph.Hu, graph.zu, graph.wu, lam0, eta0)
-    x, cb = solve_chain(ab, rhs)
+    x, cb = solve_chain(ab, rhs, overwrite=True)
     sb = selected_inverse(cb)
     return x.reshape(-1, 2), sb[0].reshape(-1, 2), sb[1].reshape(-1, 2)[:, 0].copy()
 
@@ -444,13 +322,32 @@ def solve_lag(
     and hands the marginalised prior to the next chunk, so the working memory is O(chunk +
     window) whatever the drive length (the on-line smoother needs only the window).
     """
+    x, var, cov, _ = _lag_pass(inputs, vehicle, settings, chunk, False)
+    return x, var, cov
+
+
+def _lag_pass(
+    inputs: GraphInputs,
+    vehicle: Vehicle,
+    settings: FactorGraphSettings,
+    chunk: int,
+    with_innovations: bool,
+) -> tuple[FloatArray, FloatArray, FloatArray, tuple[FloatArray, FloatArray] | None]:
+    """:func:`solve_lag`, and with ``with_innovations`` the graph's Kalman innovations and
+    their variances (:func:`solve_kalman`'s) from the same chunks' factors: the filter runs
+    over each chunk's own rows and its prediction carries into the next chunk, so nothing is
+    built twice (identical to one :func:`solve_kalman` pass over the whole graph)."""
     n = inputs.t.size
     lag = int(settings.window)
     x = np.zeros((n, 2))
     var = np.zeros((n, 2))
     cov = np.zeros(n)
+    nu = np.full((n, 2), np.nan) if with_innovations else np.zeros((0, 2))
+    S = np.full((n, 2), np.nan) if with_innovations else np.zeros((0, 2))
     lam = np.diag(1.0 / np.array([settings.prior_beta, settings.prior_yaw_rate]) ** 2)
     eta = np.zeros(2)  # prior mean 0
+    x_kf = np.zeros(2)  # the filter's prediction at the chunk's first row
+    P_kf = np.diag(np.array([settings.prior_beta, settings.prior_yaw_rate]) ** 2)
     for a in range(0, n, chunk):
         b = min(a + chunk, n)
         graph = build_graph(inputs, vehicle, settings, a, min(b + max(lag, 1), n))
@@ -462,7 +359,13 @@ def solve_lag(
         x[a:b] = xs
         var[a:b] = vs
         cov[a:b] = cs[:, 0]
-    return x, var, cov
+        if with_innovations:  # the filter's prediction carries across the chunk boundary
+            m = b - a
+            nu[a:b], S[a:b], x_kf, P_kf = chain_innovations(
+                graph.F[:m], graph.g[:m], graph.wq[:m], graph.Hu[:m], graph.zu[:m],
+                graph.wu[:m], x_kf, P_kf, 2,
+            )  # fmt: skip
+    return x, var, cov, ((nu, S) if with_innovations else None)
 
 
 def solve_kalman(graph: SideslipGraph) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
@@ -489,7 +392,7 @@ def _estimate(
 ) -> Estimate:
     """Series, params and the consistency-inflated 1-sigma of one of the three methods.
 
-    ``innovations``: the graph's Kalman-filter innovations and their variances (N, 3), tested
+    ``innovations``: the graph's Kalman-filter innovations and their variances (N, >= 2), tested
     in blocks (:func:`sideslip.methods.fg_tuning.block_consistency`) over 2 s windows, trailing for the
     on-line kf_linear and fg_lag, centred for fg_batch; None when ``settings.consistency`` is
     off.  Where a window fails, the variances of beta and r are multiplied by its NIS ratio.
@@ -502,29 +405,24 @@ def _estimate(
         "low_speed_fraction": float(low_speed.mean()) if low_speed.size else 0.0,
         **extra,
     }
-    var = np.maximum(var, 0.0)
     out: dict[str, FloatArray] = {"beta": x[:, 0].copy(), "r": x[:, 1].copy()}
     inn: dict[str, FloatArray] = {}
+    inflation = np.ones(0)
     if innovations is not None:
         nu, S = innovations
         check = block_consistency(drive.t, nu[:, :2], S[:, :2], causal)
-        var = var * check.inflation[:, None]
+        inflation = check.inflation
         out["health"] = check.health
         params["health"] = {**check.summary(drive.t), "test": (
             f"sums of the graph's Kalman innovations (gyro, a_y) over {BLOCK_S:g} s blocks, "
             f"chi2 99 % over {WINDOW_S:g} s windows; variance x NIS ratio where it fails")}
         inn = {"wz": nu[:, 0], "wz_s": S[:, 0], "ay": nu[:, 1], "ay_s": S[:, 1]}
     if settings.stiffness_rel_sigma > 0:
-        # axle slip angles (module docstring) at the model speed; the larger one
-        v = prep.inputs.v_measurement
-        alpha_r = vehicle.lr * x[:, 1] / v - x[:, 0]
-        alpha_f = prep.inputs.delta - x[:, 0] - vehicle.lf * x[:, 1] / v
-        alpha = np.maximum(np.abs(alpha_f), np.abs(alpha_r))
-        var[:, 0] += (settings.stiffness_rel_sigma * alpha) ** 2
         params["stiffness_rel_sigma"] = settings.stiffness_rel_sigma
-    std = np.sqrt(var)
-    out["beta_std"] = std[:, 0]
-    out["r_std"] = std[:, 1]
+    out["beta_std"], out["r_std"] = one_sigma(
+        x, var, inflation, prep.inputs.delta, prep.inputs.v_measurement, vehicle.lf, vehicle.lr,
+        settings.stiffness_rel_sigma,
+    )  # fmt: skip
     return Estimate(name, drive.t, out, params, inn)
 
 
@@ -533,7 +431,8 @@ def _filter_innovations(
 ) -> tuple[FloatArray, FloatArray] | None:
     if not settings.consistency:
         return None
-    _, _, _, nu, S = solve_kalman(graph)
+    nu, S, _, _ = chain_innovations(graph.F, graph.g, graph.wq, graph.Hu, graph.zu, graph.wu,
+                                    graph.x0, np.diag(graph.sigma0**2), 2)  # fmt: skip
     return nu, S
 
 
@@ -570,9 +469,8 @@ def fg_lag(
     """Fixed-lag factor-graph smoother: each row's state from the data up to ``window`` rows
     later (an on-line delay of window x dt), oldest state marginalised into the next prior.
     The "auto" sigmas are identified off-line from the whole drive (module fg_tuning)."""
-    prep = prepare(drive, vehicle, settings)
-    x, var, cov = solve_lag(prep.inputs, vehicle, prep.settings)
-    inn = _filter_innovations(_graph(prep, vehicle), settings) if settings.consistency else None
+    prep = prepare(drive, vehicle, settings, keep_graph=False)
+    x, var, cov, inn = _lag_pass(prep.inputs, vehicle, prep.settings, LAG_CHUNK, settings.consistency)
     return _estimate(
         "fg_lag", drive, prep, inn, x, var, cov, settings, True,
         {"window": int(settings.window), "output_delay_samples": int(settings.window)}, vehicle,

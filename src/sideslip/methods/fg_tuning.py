@@ -201,6 +201,134 @@ def chain_kalman(
     return xs, vs, cs, nu, ss
 
 
+@numba.njit(cache=True)
+def chain_innovations(
+    F: FloatArray,
+    g: FloatArray,
+    wq: FloatArray,
+    Hu: FloatArray,
+    zu: FloatArray,
+    wu: FloatArray,
+    x0: FloatArray,
+    P0: FloatArray,
+    n_factors: int,
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+    """:func:`chain_kalman`'s innovations and their variances S of the first ``n_factors``
+    unary factors (N, n_factors; NaN where absent), computed by the same steps but without
+    storing the states (the consistency test needs only these).
+
+    Also returns the filter's prediction ``(x, P)`` for the row after the last one when ``F``
+    holds that step (``F.shape[0] >= N``: a chunk of a longer chain, continued by the next
+    call from that prediction), else the last row's filtered state.
+    """
+    n = Hu.shape[0]
+    M = Hu.shape[1]
+    nx = Hu.shape[2]
+    x = x0.copy()
+    P = P0.copy()
+    Q = np.zeros((nx, nx))
+    work = np.empty((2 * nx + 2, nx))
+    nu = np.full((n, n_factors), np.nan)
+    ss = np.full((n, n_factors), np.nan)
+    for k in range(n):
+        for m in range(M):
+            w = wu[k, m]
+            if w == 0.0:
+                continue
+            innov = zu[k, m]
+            for i in range(nx):
+                innov -= Hu[k, m, i] * x[i]
+            s = update_scalar_ws_nb(x, P, innov, Hu[k, m], 1.0 / w, work)
+            if m < n_factors:
+                ss[k, m] = s
+                nu[k, m] = innov
+        if k < F.shape[0]:
+            for i in range(nx):
+                Q[i, i] = 1.0 / wq[k, i]
+            predict_ws_nb(x, P, F[k], Q, g[k], work)
+    return nu, ss, x, P
+
+
+@numba.njit(cache=True)
+def gyro_prediction_errors(
+    F: FloatArray,
+    g: FloatArray,
+    wq: FloatArray,
+    Hu: FloatArray,
+    zu: FloatArray,
+    wu: FloatArray,
+    x0: FloatArray,
+    P0: FloatArray,
+    horizon: int,
+    stride: int,
+    score: NDArray[np.bool_],
+    gap: NDArray[np.bool_],
+    ay_scale: FloatArray,
+    beta_scale: FloatArray,
+) -> tuple[FloatArray, NDArray[np.int64], FloatArray]:
+    """:func:`gyro_prediction_error` of every candidate c in one pass over the rows: the
+    candidates' filters run side by side (independent recursions, so the processor overlaps
+    them, and the factors are read once).  Candidate c divides the a_y factor's weights
+    (``wu[:, 1]``) by ``ay_scale[c]`` and the beta dynamic factor's (``wq[:, 0]``, except
+    across a time gap) by ``beta_scale[c]``, i.e. sigma^2 times the unit weights; each
+    candidate's arithmetic is exactly that of its own :func:`gyro_prediction_error` run.
+    Returns per candidate (sum of squared errors, count, sum of errors)."""
+    n = Hu.shape[0]
+    M = Hu.shape[1]
+    nx = Hu.shape[2]
+    n_cand = ay_scale.size
+    xs = np.empty((n_cand, nx))
+    Ps = np.empty((n_cand, nx, nx))
+    for c in range(n_cand):
+        xs[c] = x0
+        Ps[c] = P0
+    Q = np.zeros((nx, nx))
+    work = np.empty((2 * nx + 2, nx))
+    y = np.zeros(nx)
+    sse = np.zeros(n_cand)
+    se = np.zeros(n_cand)
+    count = np.zeros(n_cand, dtype=np.int64)
+    for k in range(n):
+        e = k + horizon
+        predict_here = k % stride == 0 and e < n and wu[e, 0] != 0.0 and score[e]
+        across_gap = False
+        if predict_here:
+            for j in range(k, e):
+                if F[j, 0, 0] == 0.0 and F[j, 1, 1] == 0.0:  # a time gap: no prediction
+                    across_gap = True
+                    break
+        for c in range(n_cand):
+            x = xs[c]
+            P = Ps[c]
+            for m in range(M):
+                w = wu[k, m] / ay_scale[c] if m == 1 else wu[k, m]
+                if w == 0.0:
+                    continue
+                innov = zu[k, m]
+                for i in range(nx):
+                    innov -= Hu[k, m, i] * x[i]
+                update_scalar_ws_nb(x, P, innov, Hu[k, m], 1.0 / w, work)
+            if predict_here and not across_gap:
+                for i in range(nx):
+                    y[i] = x[i]
+                for j in range(k, e):
+                    b0 = g[j, 0] + F[j, 0, 0] * y[0] + F[j, 0, 1] * y[1]
+                    y[1] = g[j, 1] + F[j, 1, 0] * y[0] + F[j, 1, 1] * y[1]
+                    y[0] = b0
+                d = zu[e, 0]
+                for i in range(nx):
+                    d -= Hu[e, 0, i] * y[i]
+                sse[c] += d * d
+                se[c] += d
+                count[c] += 1
+            if k < n - 1:
+                Q[0, 0] = 1.0 / (wq[k, 0] if gap[k] else wq[k, 0] / beta_scale[c])
+                for i in range(1, nx):
+                    Q[i, i] = 1.0 / wq[k, i]
+                predict_ws_nb(x, P, F[k], Q, g[k], work)
+    return sse, count, se
+
+
 def choose_sigmas(
     fixed: Mapping[str, float | None],
     F: FloatArray,
@@ -239,21 +367,21 @@ def choose_sigmas(
     move = ~gap
     wq[move, 1] = wq_unit[move, 1] / sigmas["model_yaw_rate"] ** 2
     best = (math.inf, grid_a[0], grid_b[0])
-    for sa in grid_a:
-        wu[:, 1] = wu_unit[:, 1] / sa**2
-        for sb in grid_b:
-            wq[move, 0] = wq_unit[move, 0] / sb**2
-            sse, count, se = gyro_prediction_error(
-                F, g, wq, Hu, zu, wu, x0, P0, horizon, STRIDE, score
-            )
-            # the error's variance, not its mean square: a constant gyro bias (the model has
-            # none, so the prediction decays it away over the horizon) shifts every
-            # candidate's error alike and must not decide (raw phone gyros: several deg/s)
-            mse = max(sse / count - (se / count) ** 2, 0.0) if count else math.inf
-            candidates.append({"lateral_acceleration": sa, "model_beta": sb,
-                               "gyro_prediction_std_rad_s": math.sqrt(mse)})
-            if mse < best[0]:
-                best = (mse, sa, sb)
+    pairs = [(sa, sb) for sa in grid_a for sb in grid_b]
+    # every candidate's filter in one pass (sigma^2 divides the unit weights)
+    sums = gyro_prediction_errors(
+        F, g, wq, Hu, zu, wu, x0, P0, horizon, STRIDE, score, gap,
+        np.array([sa**2 for sa, _ in pairs]), np.array([sb**2 for _, sb in pairs]),
+    )  # fmt: skip
+    for (sa, sb), sse, count, se in zip(pairs, *(a.tolist() for a in sums), strict=True):
+        # the error's variance, not its mean square: a constant gyro bias (the model has
+        # none, so the prediction decays it away over the horizon) shifts every candidate's
+        # error alike and must not decide (raw phone gyros: several deg/s)
+        mse = max(sse / count - (se / count) ** 2, 0.0) if count else math.inf
+        candidates.append({"lateral_acceleration": sa, "model_beta": sb,
+                           "gyro_prediction_std_rad_s": math.sqrt(mse)})
+        if mse < best[0]:
+            best = (mse, sa, sb)
     if math.isfinite(best[0]):
         for name, value in (("lateral_acceleration", best[1]), ("model_beta", best[2])):
             if fixed[name] is None:
@@ -264,6 +392,43 @@ def choose_sigmas(
 
 BLOCK_S = 0.25  # s: innovations are summed over blocks this long before the chi^2 test
 WINDOW_S = 2.0  # s: sliding window of the NIS test (8 blocks per factor)
+
+
+@numba.njit(cache=True)
+def _block_nis(
+    t: FloatArray, innov: FloatArray, S: FloatArray, block_s: float
+) -> tuple[NDArray[np.int64], FloatArray, FloatArray]:
+    """First row of each block (floor((t - t_0) / block_s)), and per block the NIS
+    sum over factors of (sum nu)^2 / sum S and its degrees of freedom (the factors with an
+    update in the block); one pass over the rows."""
+    n, n_fac = innov.shape
+    start = np.empty(n, dtype=np.int64)
+    nis = np.zeros(n)
+    dof = np.zeros(n)
+    sum_nu = np.zeros(n_fac)
+    sum_s = np.zeros(n_fac)
+    nb = 0
+    current = -1
+    for k in range(n + 1):
+        b = int(np.floor((t[k] - t[0]) / block_s)) if k < n else -2
+        if b != current:
+            if nb > 0:  # close the previous block
+                for m in range(n_fac):
+                    if sum_s[m] > 0.0:
+                        nis[nb - 1] += sum_nu[m] ** 2 / sum_s[m]
+                        dof[nb - 1] += 1.0
+                    sum_nu[m] = 0.0
+                    sum_s[m] = 0.0
+            if k == n:
+                break
+            start[nb] = k
+            nb += 1
+            current = b
+        for m in range(n_fac):
+            if np.isfinite(innov[k, m]) and np.isfinite(S[k, m]):
+                sum_nu[m] += innov[k, m]
+                sum_s[m] += S[k, m]
+    return start[:nb].copy(), nis[:nb].copy(), dof[:nb].copy()
 
 
 def block_consistency(
@@ -281,20 +446,8 @@ def block_consistency(
     :func:`sideslip.filters.consistency.nis_consistency` over ``WINDOW_S`` windows (chi^2 99 %)
     at the blocks' start times, and its result is held over each block's rows.  O(N).
     """
-    n, n_fac = innov.shape
-    block = np.floor((t - t[0]) / block_s).astype(np.int64)
-    start = np.flatnonzero(np.r_[True, np.diff(block) != 0])
-    nis = np.zeros(start.size)
-    dof = np.zeros(start.size)
-    for m in range(n_fac):
-        ok = np.isfinite(innov[:, m]) & np.isfinite(S[:, m])
-        if not ok.any():
-            continue
-        sum_nu = np.add.reduceat(np.where(ok, innov[:, m], 0.0), start)
-        sum_s = np.add.reduceat(np.where(ok, S[:, m], 0.0), start)
-        has = sum_s > 0.0
-        nis += np.where(has, sum_nu**2 / np.where(has, sum_s, 1.0), 0.0)
-        dof += has
+    n = innov.shape[0]
+    start, nis, dof = _block_nis(t, innov, S, block_s)
     check = nis_consistency(t[start], nis, dof, window_s=WINDOW_S, causal=causal)
     rows = np.repeat(np.arange(start.size), np.diff(np.r_[start, n]))
     return Consistency(check.mean_nis[rows], check.inflation[rows], check.health[rows],

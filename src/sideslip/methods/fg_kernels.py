@@ -1,0 +1,119 @@
+"""Compiled per-row passes of the seed-002 graph (:mod:`sideslip.methods.factor_graph`): the
+chain factors from the single-track model's matrices, and the reported 1-sigma.
+
+Each is one loop over the drive's rows with no temporaries (the numpy form of the same
+arithmetic made several full-length passes); the factors are those of the factor graph's
+module docstring (Leanza, Reina, Blanco-Claraco 2021, seed 002, eqs 6-7, 16).
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+from numpy.typing import NDArray
+
+FloatArray = NDArray[np.float64]
+
+
+@numba.njit(cache=True)
+def chain_factors(
+    t: FloatArray,
+    A: FloatArray,
+    B: FloatArray,
+    C: FloatArray,
+    D: FloatArray,
+    delta: FloatArray,
+    low: NDArray[np.bool_],
+    gap: NDArray[np.bool_],
+    wz: FloatArray,
+    ay: FloatArray,
+    sigmas: FloatArray,
+    reference_dt: float,
+    low_speed_inflation: float,
+    prior_beta: float,
+    prior_yaw_rate: float,
+    low_speed_beta: float,
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
+    """The chain factors of :func:`sideslip.methods.factor_graph.build_graph` in one pass over
+    the rows (layout of :class:`~sideslip.methods.factor_graph.SideslipGraph`; the low-speed
+    factor's value is filled by the caller).
+
+    Dynamic factor k: F = I + dt A_k, g = dt B_k delta_k (forward Euler, paper eq 6), sigmas
+    ``sigmas[:2]`` x sqrt(dt / reference_dt), x ``low_speed_inflation`` below the speed gate;
+    across a time gap F = 0, g = 0 and the prior's sigmas (a restart).  Unary factors: yaw
+    rate r_k = wz_k (sigma ``sigmas[2]``), a_y: C_k x_k = ay_k - D_k delta_k above the gate
+    (``sigmas[3]``), low-speed beta (``low_speed_beta``) below it; sigma inf where absent.
+    """
+    n = t.size
+    F = np.empty((n - 1, 2, 2))
+    g = np.empty((n - 1, 2))
+    sigma_q = np.empty((n - 1, 2))
+    for k in range(n - 1):
+        if gap[k]:
+            F[k] = 0.0
+            g[k] = 0.0
+            sigma_q[k, 0] = prior_beta
+            sigma_q[k, 1] = prior_yaw_rate
+            continue
+        dt = t[k + 1] - t[k]
+        for i in range(2):
+            for j in range(2):
+                F[k, i, j] = dt * A[k, i, j] + (1.0 if i == j else 0.0)
+            g[k, i] = dt * B[k, i, 0] * delta[k]
+        scale = np.sqrt(dt / reference_dt)
+        for i in range(2):
+            sigma_q[k, i] = sigmas[i] * scale
+            if low[k]:
+                sigma_q[k, i] *= low_speed_inflation
+    Hu = np.zeros((n, 3, 2))
+    zu = np.zeros((n, 3))
+    sigma_u = np.full((n, 3), np.inf)
+    for k in range(n):
+        Hu[k, 0, 1] = 1.0
+        Hu[k, 1, 0] = C[k, 1, 0]
+        Hu[k, 1, 1] = C[k, 1, 1]
+        Hu[k, 2, 0] = 1.0
+        if np.isfinite(wz[k]):
+            zu[k, 0] = wz[k]
+            sigma_u[k, 0] = sigmas[2]
+        if low[k]:
+            sigma_u[k, 2] = low_speed_beta
+        elif np.isfinite(ay[k]):
+            zu[k, 1] = ay[k] - D[k, 1, 0] * delta[k]
+            sigma_u[k, 1] = sigmas[3]
+    return F, g, sigma_q, Hu, zu, sigma_u
+
+
+@numba.njit(cache=True)
+def one_sigma(
+    x: FloatArray,
+    var: FloatArray,
+    inflation: FloatArray,
+    delta: FloatArray,
+    v: FloatArray,
+    lf: float,
+    lr: float,
+    stiffness_rel_sigma: float,
+) -> tuple[FloatArray, FloatArray]:
+    """1-sigma of beta and r, one pass per row: the solver's variances (clipped at 0) times
+    the consistency ``inflation`` (empty: none), plus for beta (stiffness_rel_sigma x the
+    larger axle slip angle)^2 with alpha_f = delta - beta - lf r / V, alpha_r = lr r / V - beta
+    at the a_y factor's speed V (:mod:`sideslip.methods.factor_graph`)."""
+    n = x.shape[0]
+    beta_std = np.empty(n)
+    r_std = np.empty(n)
+    inflate = inflation.size > 0
+    for k in range(n):
+        vb = var[k, 0] if not var[k, 0] < 0.0 else 0.0
+        vr = var[k, 1] if not var[k, 1] < 0.0 else 0.0
+        if inflate:
+            vb = vb * inflation[k]
+            vr = vr * inflation[k]
+        if stiffness_rel_sigma > 0.0:
+            alpha_r = lr * x[k, 1] / v[k] - x[k, 0]
+            alpha_f = delta[k] - x[k, 0] - lf * x[k, 1] / v[k]
+            a = stiffness_rel_sigma * max(abs(alpha_f), abs(alpha_r))
+            vb += a * a
+        beta_std[k] = np.sqrt(vb)
+        r_std[k] = np.sqrt(vr)
+    return beta_std, r_std
