@@ -9,7 +9,7 @@ import pytest
 
 from sideslip.evaluate import SPEED_GATE, metrics
 from sideslip.frames import wrap_angle
-from sideslip.methods.fused import FusedSettings, accel_noise_sigma, force_time_constant, fuse
+from sideslip.methods.fused import FusedSettings, fuse
 from sideslip.methods.registry import all_methods, run_method, why_not
 from sideslip.vehicle import load_vehicle
 from tests.conftest import sim_drive
@@ -188,25 +188,6 @@ def test_health_flags_a_receiver_that_disagrees_with_the_car():
     err = np.abs(est["beta"] - drive["ref_beta"])[bad]
     assert np.degrees(err.max()) < 0.5
     assert np.mean(err < 2 * est["beta_std"][bad]) > 0.85
-
-
-def test_force_low_pass_is_as_short_as_the_accelerometer_noise_allows():
-    """The axle forces' low-pass: the floor for a clean accelerometer; for a noisy one (a real
-    car's vibration: the Revs lap reads about 0.85 m/s^2 per sample) the time constant whose
-    first-order low-pass leaves force_noise_sigma of the noise, checked by filtering white
-    noise (analytic sigma sqrt(dt / (2 tau)); 2 % tolerance: 40 000 samples)."""
-    from sideslip.methods.fused import _low_pass
-
-    rng = np.random.default_rng(3)
-    t = np.arange(40_000) * 0.01
-    nz = FusedSettings()
-    clean = 0.05 * rng.standard_normal(t.size)
-    assert accel_noise_sigma(clean) == pytest.approx(0.05, rel=0.03)
-    assert force_time_constant(t, clean, 0.05, nz) == 0.05
-    noisy = 3.0 * rng.standard_normal(t.size)
-    tau = force_time_constant(t, noisy, 0.05, nz)
-    assert tau == pytest.approx(0.01 * 9.0 / (2 * nz.force_noise_sigma**2), rel=0.05)
-    assert np.std(_low_pass(t, noisy, tau)[100:]) == pytest.approx(nz.force_noise_sigma, rel=0.05)
 
 
 @pytest.mark.parametrize(("scenario", "factor", "bound"), [("race_lap", 1.0, 0.35), ("cr_step_steer", 0.7, 0.22)])
