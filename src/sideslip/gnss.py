@@ -57,20 +57,42 @@ def column(drive: Drive, name: str) -> FloatArray:
     return np.full(len(drive), np.nan)
 
 
-def _sigma_or_default(values: FloatArray, default: float) -> FloatArray:
-    return np.where(np.isfinite(values) & (values > 0), values, default)
+def _sigma_or_default(values: FloatArray, default: float, floor: float = 0.0) -> FloatArray:
+    """Receiver sigmas: ``default`` where missing or non-positive, at least ``floor``."""
+    return np.where(np.isfinite(values) & (values > 0), np.maximum(values, floor), default)
+
+
+@numba.njit(cache=True)
+def gauss_markov_nb(dt: float, tau_s: float, sigma: float) -> tuple[float, float]:
+    """Exact discretisation of a first-order Gauss-Markov error of time constant ``tau_s``
+    and stationary 1-sigma ``sigma`` over one step ``dt``: ``(phi, q)`` with
+    ``phi = exp(-dt / tau)`` and the driving-noise variance ``q = sigma^2 (1 - phi^2)``
+    (module docstring).  ``tau_s = inf`` gives a constant (phi = 1, q = 0), ``tau_s <= 0``
+    white noise (phi = 0, q = sigma^2).  The one implementation: compiled filter loops call
+    it per step, :func:`gauss_markov` over arrays."""
+    if math.isinf(tau_s):
+        phi = 1.0
+    elif tau_s <= 0.0:
+        phi = 0.0
+    else:
+        phi = math.exp(-dt / tau_s)
+    return phi, sigma * sigma * (1.0 - phi * phi)
+
+
+@numba.njit(cache=True)
+def _gauss_markov_array(dt: NDArray, tau_s: float, sigma: float) -> tuple[NDArray, NDArray]:
+    phi = np.empty(dt.size)
+    q = np.empty(dt.size)
+    for i in range(dt.size):
+        phi[i], q[i] = gauss_markov_nb(dt[i], tau_s, sigma)
+    return phi, q
 
 
 def gauss_markov(dt: float | FloatArray, tau_s: float, sigma: float) -> tuple[FloatArray, FloatArray]:
-    """Exact discretisation of a first-order Gauss-Markov error of time constant ``tau_s``
-    and stationary 1-sigma ``sigma`` over ``dt``: returns ``(phi, q)`` with
-    ``phi = exp(-dt / tau)`` and the discrete driving-noise variance ``q = sigma^2 (1 - phi^2)``
-    (module docstring).  ``tau_s = inf`` gives a constant (phi = 1, q = 0)."""
+    """:func:`gauss_markov_nb` over an array (or scalar) of steps ``dt``: ``(phi, q)``."""
     d = np.asarray(dt, dtype=float)
-    phi = np.exp(-d / tau_s) if math.isfinite(tau_s) and tau_s > 0 else np.ones_like(d)
-    if math.isfinite(tau_s) and tau_s <= 0:
-        phi = np.zeros_like(d)
-    return phi, sigma * sigma * (1.0 - phi * phi)
+    phi, q = _gauss_markov_array(np.ascontiguousarray(d.ravel()), float(tau_s), float(sigma))
+    return phi.reshape(d.shape), q.reshape(d.shape)
 
 
 @dataclass(frozen=True)
@@ -89,10 +111,16 @@ class VelocitySamples:
         return np.hypot(self.ve, self.vn)
 
 
-def velocity_samples(drive: Drive, use_positions: bool = True) -> VelocitySamples:
+def velocity_samples(
+    drive: Drive,
+    use_positions: bool = True,
+    default_sigma_m_s: float = VEL_SIGMA_DEFAULT_M_S,
+    floor_sigma_m_s: float = 0.0,
+) -> VelocitySamples:
     """Doppler velocity, else (``use_positions``) differenced GNSS positions.
 
-    The 1-sigma is ``gnss_vel_std`` (default :data:`VEL_SIGMA_DEFAULT_M_S`) for Doppler and
+    The 1-sigma is ``gnss_vel_std`` (``default_sigma_m_s`` where the drive gives none, at
+    least ``floor_sigma_m_s``: a filter's floor for receivers that claim too much) for Doppler and
     sqrt(2) w sigma_pos / dt for differenced fixes, w = :data:`POS_WHITE_FRACTION` the share of
     the position error that changes from fix to fix (the slow part cancels in the difference;
     the same split as the seed-004 EKF's GNSS model).
@@ -101,7 +129,7 @@ def velocity_samples(drive: Drive, use_positions: bool = True) -> VelocitySample
     if "gnss_ve" in drive and "gnss_vn" in drive:
         ve, vn = drive["gnss_ve"], drive["gnss_vn"]
         rows = np.flatnonzero(np.isfinite(ve) & np.isfinite(vn))
-        sig = _sigma_or_default(column(drive, "gnss_vel_std")[rows], VEL_SIGMA_DEFAULT_M_S)
+        sig = _sigma_or_default(column(drive, "gnss_vel_std")[rows], default_sigma_m_s, floor_sigma_m_s)
         return VelocitySamples(rows, ve[rows], vn[rows], sig, "doppler")
     if not use_positions or "gnss_e" not in drive or "gnss_n" not in drive:
         return empty
@@ -197,17 +225,22 @@ class PositionSamples:
         return float(np.median(self.sigma)) if self.sigma.size else POS_SIGMA_DEFAULT_M
 
 
-def position_samples(drive: Drive) -> PositionSamples:
-    """GNSS position fixes with ``gnss_pos_std`` (default :data:`POS_SIGMA_DEFAULT_M`)."""
+def position_samples(
+    drive: Drive, default_sigma_m: float = POS_SIGMA_DEFAULT_M, floor_sigma_m: float = 0.0
+) -> PositionSamples:
+    """GNSS position fixes with ``gnss_pos_std`` (``default_sigma_m`` where the drive gives
+    none, at least ``floor_sigma_m``)."""
     e, n = column(drive, "gnss_e"), column(drive, "gnss_n")
     rows = np.flatnonzero(np.isfinite(e) & np.isfinite(n))
-    sig = _sigma_or_default(column(drive, "gnss_pos_std")[rows], POS_SIGMA_DEFAULT_M)
+    sig = _sigma_or_default(column(drive, "gnss_pos_std")[rows], default_sigma_m, floor_sigma_m)
     return PositionSamples(rows, e[rows], n[rows], sig)
 
 
-def doppler_samples(drive: Drive) -> VelocitySamples:
+def doppler_samples(
+    drive: Drive, default_sigma_m_s: float = VEL_SIGMA_DEFAULT_M_S, floor_sigma_m_s: float = 0.0
+) -> VelocitySamples:
     """Doppler velocity samples only (never differenced positions)."""
-    return velocity_samples(drive, use_positions=False)
+    return velocity_samples(drive, False, default_sigma_m_s, floor_sigma_m_s)
 
 
 @numba.njit(cache=True)

@@ -1,4 +1,4 @@
-"""Generic Kalman numerics: analytic scalar cases, Joseph form, DARE, whiteness test."""
+"""Every compiled Kalman kernel against its plain-numpy reference (seeded random SPD problems)."""
 
 from __future__ import annotations
 
@@ -6,41 +6,33 @@ import numpy as np
 import pytest
 
 from sideslip.filters.kalman import (
-    autocorrelation,
-    cholesky,
     cholesky_nb,
-    nis,
-    normalised_innovations,
-    predict,
+    pack_upper_nb,
     predict_nb,
+    predict_rows_ws_nb,
     predict_sparse_nb,
-    rts_smooth,
+    predict_ws_nb,
     rts_smooth_nb,
-    steady_state,
-    update_joseph,
-    update_robust_scalar,
+    rts_step_ws_nb,
+    rts_workspace,
+    unpack_upper_nb,
+    update_robust_pair_ws_nb,
     update_robust_scalar_nb,
+    update_robust_scalar_ws_nb,
     update_scalar_nb,
+    update_scalar_ws_nb,
     update_vector_nb,
-    whiteness,
+    workspace,
 )
-
-
-def test_scalar_update_matches_hand_computation() -> None:
-    # prior N(0, 4), measurement z = 2 with variance 1: K = 4/5, x+ = 1.6, P+ = 0.8
-    x, P, innov, S = update_joseph([0.0], [[4.0]], [2.0], [[1.0]], [[1.0]])
-    assert x[0] == pytest.approx(1.6, abs=1e-12)
-    assert P[0, 0] == pytest.approx(0.8, abs=1e-12)
-    assert innov[0] == pytest.approx(2.0)
-    assert S[0, 0] == pytest.approx(5.0)
-
-
-def test_predict_propagates_mean_and_covariance() -> None:
-    F = np.array([[1.0, 0.1], [0.0, 1.0]])
-    G = np.array([[0.005], [0.1]])
-    x, P = predict([1.0, 2.0], np.eye(2), F, 0.01 * np.eye(2), G, [3.0])
-    np.testing.assert_allclose(x, [1.0 + 0.2 + 0.015, 2.3])
-    np.testing.assert_allclose(P, F @ F.T + 0.01 * np.eye(2))
+from sideslip.filters.reference import (
+    cholesky,
+    predict,
+    rts_smooth,
+    update_joseph,
+    update_robust_pair,
+    update_robust_scalar,
+)
+from sideslip.models.fused_process import NX_CORE, f_rows, process
 
 
 def test_numba_kernels_match_numpy_and_sequential_equals_batch() -> None:
@@ -69,70 +61,18 @@ def test_numba_kernels_match_numpy_and_sequential_equals_batch() -> None:
     np.testing.assert_allclose(Ps, Pb, rtol=1e-10, atol=1e-12)
 
 
-def test_joseph_form_keeps_covariance_symmetric_positive_with_suboptimal_round_off() -> None:
-    # a nearly singular update (R tiny) is where the short form (I - K H) P loses symmetry
-    P = np.array([[1e4, 1e4 - 1e-3], [1e4 - 1e-3, 1e4]])
-    _, Pn, _, _ = update_joseph([0.0, 0.0], P, [1.0], [[1.0, 0.0]], [[1e-9]])
-    assert np.allclose(Pn, Pn.T, rtol=0, atol=0)
-    assert np.all(np.linalg.eigvalsh(Pn) > -1e-9)
 
 
-def test_steady_state_scalar_random_walk_is_analytic() -> None:
-    # x_{k+1} = x_k + w (var q), z = x + v (var r): P- = (q + sqrt(q^2 + 4 q r)) / 2
-    q, r = 0.2, 1.5
-    ss = steady_state([[1.0]], [[1.0]], [[q]], [[r]])
-    pm = 0.5 * (q + np.sqrt(q * q + 4 * q * r))
-    assert ss.P_prior[0, 0] == pytest.approx(pm, rel=1e-10)
-    assert ss.P_post[0, 0] == pytest.approx(pm * r / (pm + r), rel=1e-10)
-    assert ss.K[0, 0] == pytest.approx(pm / (pm + r), rel=1e-10)
 
 
-def test_steady_state_is_the_limit_of_the_recursion() -> None:
-    F = np.array([[0.9, 0.1], [0.0, 1.0]])
-    H = np.array([[1.0, 0.0]])
-    Q = np.diag([0.01, 0.001])
-    R = np.array([[0.1]])
-    x, P = np.zeros(2), np.eye(2)
-    for _ in range(2000):
-        x, P = predict(x, P, F, Q)
-        x, P, _, _ = update_joseph(x, P, [0.0], H, R)
-    ss = steady_state(F, H, Q, R)
-    np.testing.assert_allclose(P, ss.P_post, rtol=1e-8)
 
 
-def test_normalised_innovations_divides_by_sigma_and_keeps_nan() -> None:
-    z = normalised_innovations([2.0, np.nan, 1.0, 3.0], [4.0, 1.0, 0.0, np.nan])
-    assert z[0] == pytest.approx(1.0)
-    assert np.isnan(z[1]) and np.isnan(z[2]) and np.isnan(z[3])
 
 
-def test_whiteness_accepts_white_noise_and_rejects_ar1() -> None:
-    rng = np.random.default_rng(7)
-    e = rng.normal(size=5000)
-    w = whiteness(e, lags=20)
-    # white noise: p-value uniform on [0, 1]; this seed gives a typical draw (fixed, so not flaky)
-    assert w.white and w.p_value > 0.05
-    assert w.nis_mean == pytest.approx(1.0, abs=0.05)  # 5000 samples: sd of the mean ~0.02
-    ar = np.empty_like(e)
-    ar[0] = e[0]
-    for k in range(1, e.size):
-        ar[k] = 0.5 * ar[k - 1] + e[k]
-    c = whiteness(ar, lags=20)
-    assert not c.white and c.p_value < 1e-10
-    # lag-1 autocorrelation of AR(1) is its coefficient (0.5; sampling sd ~ 1/sqrt(n) = 0.014)
-    assert c.rho[0] == pytest.approx(0.5, abs=0.05)
-    assert c.colour > 10 * w.colour
 
 
-def test_whiteness_short_sequence_is_inconclusive() -> None:
-    w = whiteness([0.1, -0.2, 0.3], lags=20)
-    assert w.white and w.p_value == 1.0 and w.n == 3
-    assert autocorrelation(np.zeros(50), 5).tolist() == [0.0] * 5
 
 
-# ------------------------------------------------------------------------------------------
-# every numba kernel against its plain-numpy reference (seeded random SPD problems)
-# ------------------------------------------------------------------------------------------
 def _spd(rng: np.random.Generator, n: int) -> np.ndarray:
     L = rng.normal(size=(n, n))
     return L @ L.T + 0.5 * np.eye(n)
@@ -231,13 +171,6 @@ def test_robust_update_kernel_matches_reference_and_weights(gate: float, huber: 
     np.testing.assert_allclose(Pn, Pr, rtol=1e-9, atol=1e-11)
 
 
-def test_nis_scalar_and_vector_forms() -> None:
-    np.testing.assert_allclose(nis([2.0, np.nan, 1.0], [4.0, 1.0, 0.0]), [1.0, np.nan, np.nan])
-    S = np.array([[[2.0, 0.5], [0.5, 1.0]]] * 2)
-    nu = np.array([[1.0, -1.0], [np.nan, 0.0]])
-    ref = float(nu[0] @ np.linalg.solve(S[0], nu[0]))
-    out = nis(nu, S)
-    assert out[0] == pytest.approx(ref) and np.isnan(out[1])
 
 
 def _random_walk_filter(rng: np.random.Generator, n_rows: int) -> tuple[np.ndarray, ...]:
@@ -285,10 +218,8 @@ def test_rts_kernel_matches_numpy_and_beats_the_filter_on_truth() -> None:
 
 @pytest.mark.parametrize("n", [2, 5])
 def test_scratch_space_kernels_match_the_allocating_ones(n: int) -> None:
-    from sideslip.filters.kalman import predict_nb, predict_ws_nb, update_scalar_ws_nb
-
     rng = np.random.default_rng(40 + n)
-    work = np.empty((2 * n + 2, n))
+    work = workspace(n)
     for _ in range(5):
         P = _spd(rng, n)
         x = rng.normal(size=n)
@@ -307,3 +238,84 @@ def test_scratch_space_kernels_match_the_allocating_ones(n: int) -> None:
         assert s2 == pytest.approx(s1, rel=1e-13)
         np.testing.assert_allclose(x2, x1, rtol=1e-12, atol=1e-13)
         np.testing.assert_allclose(P2, P1, rtol=1e-12, atol=1e-13)
+
+
+def _transition(rng: np.random.Generator) -> np.ndarray:
+    """The fused estimator's process Jacobian at a random state (a typical sparse EKF F)."""
+    x = rng.normal(0, 0.1, NX_CORE)
+    x[3] = 15.0
+    return process(x, np.array([0.1, 0.0, 0.0, 0.2, 2.0, 2.0]), 0.05, 0.01, 60.0)[1]
+
+
+def test_row_sparse_prediction_equals_dense() -> None:
+    rng = np.random.default_rng(0)
+    P, F, q = _spd(rng, NX_CORE), _transition(rng), rng.uniform(0, 1e-3, NX_CORE)
+    Pn, tmp = np.zeros_like(P), np.zeros_like(P)
+    predict_rows_ws_nb(P, F, f_rows(NX_CORE), q, Pn, tmp)
+    np.testing.assert_allclose(Pn, F @ P @ F.T + np.diag(q), rtol=1e-12, atol=1e-12)
+    assert np.array_equal(Pn, Pn.T)
+
+
+@pytest.mark.parametrize("sigmas", [1.0, 3.0, 10.0])
+def test_inflating_update_matches_reference_and_scales_the_variance(sigmas: float) -> None:
+    """Beyond ``inflate_nis`` the variance is r * nis / inflate_nis: a 10-sigma outlier moves
+    the state by a 16/100 share of the plain update's gain, a 1-sigma one at full weight."""
+    rng = np.random.default_rng(2)
+    P, x = _spd(rng, NX_CORE), np.zeros(NX_CORE)
+    h = np.zeros(NX_CORE)
+    h[3] = 1.0
+    r, inflate = 0.01, 16.0
+    innov = sigmas * float(np.sqrt(P[3, 3] + r))
+    xr, Pr, _, nr, wr = update_robust_scalar(x, P, innov, h, r, np.inf, np.inf, inflate)
+    x1, P1 = x.copy(), P.copy()
+    _, d2, w = update_robust_scalar_ws_nb(x1, P1, innov, h, r, np.inf, np.inf, inflate, workspace(NX_CORE))
+    assert d2 == pytest.approx(sigmas**2) == pytest.approx(nr)
+    assert w == pytest.approx(min(1.0, inflate / sigmas**2)) == pytest.approx(wr)
+    assert x1[3] == pytest.approx(P[3, 3] / (P[3, 3] + r / w) * innov)
+    np.testing.assert_allclose(x1, xr, rtol=1e-10, atol=1e-12)
+    np.testing.assert_allclose(P1, Pr, rtol=1e-9, atol=1e-11)
+
+
+@pytest.mark.parametrize("scale", [0.1, 20.0])
+def test_pair_update_equals_the_two_row_joseph_update(scale: float) -> None:
+    rng = np.random.default_rng(5)
+    P, x = _spd(rng, NX_CORE), rng.normal(size=NX_CORE)
+    H = rng.normal(size=(2, NX_CORE))
+    r, inflate = 0.05, 16.0
+    nu = scale * rng.normal(size=2)
+    xr, Pr, d2r = update_robust_pair(x, P, H, nu, r, inflate)
+    x1, P1 = x.copy(), P.copy()
+    d2 = update_robust_pair_ws_nb(x1, P1, H, nu[0], nu[1], r, inflate, workspace(NX_CORE))
+    S = H @ P @ H.T + r * np.eye(2)
+    assert d2 == pytest.approx(float(nu @ np.linalg.solve(S, nu)), rel=1e-10) == pytest.approx(d2r)
+    np.testing.assert_allclose(x1, xr, rtol=1e-9, atol=1e-11)
+    np.testing.assert_allclose(P1, Pr, rtol=1e-8, atol=1e-10)
+
+
+def test_packed_float32_storage_round_trips_to_single_precision() -> None:
+    rng = np.random.default_rng(3)
+    P = _spd(rng, NX_CORE)
+    packed = np.zeros(NX_CORE * (NX_CORE + 1) // 2, dtype=np.float32)
+    pack_upper_nb(P, packed)
+    out = np.zeros_like(P)
+    unpack_upper_nb(packed, out)
+    np.testing.assert_allclose(out, P, rtol=1e-6)
+    np.testing.assert_array_equal(out, out.T)
+
+
+def test_rts_step_equals_the_textbook_smoother() -> None:
+    """Simon 2006 eq 9.99 written densely with numpy, on the fused model's sparse F."""
+    rng = np.random.default_rng(4)
+    P, F = _spd(rng, NX_CORE), _transition(rng)
+    x = rng.normal(size=NX_CORE)
+    Q = np.diag(rng.uniform(1e-4, 1e-3, NX_CORE))
+    xn, Pn = F @ x, F @ P @ F.T + Q
+    xs_next, Ps_next = xn + rng.normal(0, 0.1, NX_CORE), Pn * 0.5
+    C = P @ F.T @ np.linalg.inv(Pn)
+    x_ref = x + C @ (xs_next - xn)
+    P_ref = P + C @ (Ps_next - Pn) @ C.T
+    x2, P2 = x.copy(), P.copy()
+    rts_step_ws_nb(x2, P2, xn, Pn, F, f_rows(NX_CORE), xs_next, Ps_next, rts_workspace(NX_CORE))
+    np.testing.assert_allclose(x2, x_ref, rtol=1e-8, atol=1e-10)
+    np.testing.assert_allclose(P2, P_ref, rtol=1e-7, atol=1e-10)
+    assert np.array_equal(P2, P2.T)

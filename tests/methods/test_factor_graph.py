@@ -492,7 +492,7 @@ def test_auto_choice_on_the_lap_survives_mems_grade_sensor_errors(revs_lap):
 def test_graph_kalman_kernel_equals_the_numpy_reference_filter():
     # The compiled filter (filters.kalman's workspace kernels) against filters.kalman's plain
     # numpy predict / Joseph update, factor by factor, on a drive with gaps and standstill.
-    from sideslip.filters.kalman import predict, update_joseph
+    from sideslip.filters.reference import predict, update_joseph
     from sideslip.methods.factor_graph import solve_kalman
 
     graph = sideslip_graph(_awkward_drive().slice(0, 1500), VEHICLE, EXACT)

@@ -1,19 +1,11 @@
-"""Generic, stateless linear Kalman-filter numerics: the only Kalman code of the package.
+"""The package's compiled Kalman kernels: the only Kalman numerics the filters in ``methods/`` run.
 
-Plain functions in the GTSAM style: every call takes the state and covariance and returns new
-ones; nothing is configured by assigning attributes.  Two flavours of the same equations:
-
-* numpy functions (:func:`predict`, :func:`update_joseph`, :func:`update_robust_scalar`,
-  :func:`nis`, :func:`rts_smooth`, :func:`cholesky`) for any dimension, used outside hot loops
-  and as the references the compiled kernels are tested against;
-* numba kernels for recursive loops over a drive, in place: :func:`predict_nb` (dense F),
-  :func:`predict_sparse_nb` (the Jacobian of a nonlinear model, mostly identity),
-  :func:`update_scalar_nb` (Joseph form), :func:`update_vector_nb` (any SPD R, whitened and
-  processed as scalar updates -- algebraically the batch update, no matrix inversion),
-  :func:`update_robust_scalar_nb` (chi-square gate + Huber weight, returns the weight),
-  :func:`cholesky_nb` and :func:`rts_smooth_nb`; :func:`predict_ws_nb` and
-  :func:`update_scalar_ws_nb` are the same steps with caller-owned scratch space, so a loop
-  over a drive allocates nothing.
+Every kernel works in place on caller-owned arrays, so a loop over an hour-long drive allocates
+nothing; the allocating forms (``predict_nb``, ``update_scalar_nb``, ``cholesky_nb``,
+``update_robust_scalar_nb``, ``rts_smooth_nb``) wrap them for code outside hot loops.  Each
+kernel has a plain-numpy reference in :mod:`sideslip.filters.reference` and a test that they
+agree (``tests/filters/test_kalman.py``); NIS, steady state and the residual whiteness tests
+are in :mod:`sideslip.filters.diagnostics`.
 
 Notation (Simon, *Optimal State Estimation*, 2006, ch. 5 and 9; seed 001 eqs 2-3):
 
@@ -21,183 +13,70 @@ Notation (Simon, *Optimal State Estimation*, 2006, ch. 5 and 9; seed 001 eqs 2-3
     measurement update  S = H P- H' + R,  K = P- H' S^-1,  x+ = x- + K (z - H x-)
                         P+ = (I - K H) P- (I - K H)' + K R K'      (Joseph form)
     NIS                 nu' S^-1 nu ~ chi2(m) for a consistent filter
+    RTS (backward)      C = P+ F' (P-_next)^-1,  x_s = x+ + C (x_s,next - x-_next),
+                        P_s = P+ + C (P_s,next - P-_next) C'   (Rauch, Tung, Striebel 1965)
+
+Kernels:
+
+* predict: :func:`predict_ws_nb` (dense F), :func:`predict_rows_ws_nb` (the Jacobian of a
+  nonlinear model with few non-zeros per row, listed in ``rows``: O(n^2 w) for w non-zeros a
+  row instead of O(n^3)), :func:`predict_sparse_nb` (the same, finding the non-zeros itself);
+* update: :func:`update_scalar_ws_nb` (Joseph form, one scalar), :func:`update_vector_nb` (any
+  SPD R, whitened and processed as scalars), :func:`update_robust_scalar_ws_nb` (chi-square
+  gate, Huber weight and NIS-proportional variance inflation) and
+  :func:`update_robust_pair_ws_nb` (a two-row measurement, e.g. a GNSS fix, weighted on its
+  2-D Mahalanobis distance);
+* smoother: :func:`rts_step_ws_nb` (one backward step, sparse F) = :func:`rts_gain_ws_nb`
+  (from the forward pass alone) + :func:`rts_update_ws_nb` (the recursion), :func:`rts_smooth_nb`;
+* linear algebra and storage: :func:`cholesky_ws_nb`, :func:`cho_solve_rows_ws_nb`,
+  :func:`pack_upper_nb` / :func:`unpack_upper_nb` (a symmetric matrix's upper triangle, e.g. in
+  float32: a quarter of the memory of the full float64 matrix).
 
 The Joseph form keeps P symmetric positive semi-definite under round-off, which matters when a
-filter runs for an hour at 100 Hz.  Steady-state covariances come from the discrete algebraic
-Riccati equation (:func:`steady_state`), and the residual diagnostics (normalised innovations,
-Ljung-Box whiteness test) from :func:`normalised_innovations` and :func:`whiteness`.
+filter runs for an hour at 100 Hz.  Scratch space: :func:`workspace` gives a buffer every
+update and predict kernel accepts; :func:`rts_workspace` the smoother's.  The kernels are
+compiled with the ``fastmath`` flags that let LLVM vectorise sums (re-association,
+contraction) but not those that assume away NaN or infinity, so a NaN measurement test or a
+non-positive innovation variance still behaves as written.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numba
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
-from scipy import linalg, stats
+from numpy.typing import NDArray
 
-FloatArray = NDArray[np.float64]
+from sideslip.filters.diagnostics import (  # noqa: F401  (the names methods import from here)
+    normalised_innovations,
+    steady_state,
+    whiteness,
+)
 
-
-# ------------------------------------------------------------------------------------------
-# numpy versions
-# ------------------------------------------------------------------------------------------
-def predict(
-    x: ArrayLike,
-    P: ArrayLike,
-    F: ArrayLike,
-    Q: ArrayLike,
-    G: ArrayLike | None = None,
-    u: ArrayLike | None = None,
-) -> tuple[FloatArray, FloatArray]:
-    """Time update ``x- = F x + G u``, ``P- = F P F' + Q``; returns ``(x-, P-)``."""
-    x = np.asarray(x, dtype=float)
-    F = np.asarray(F, dtype=float)
-    xp = F @ x
-    if G is not None and u is not None:
-        xp = xp + np.asarray(G, dtype=float) @ np.asarray(u, dtype=float)
-    Pp = F @ np.asarray(P, dtype=float) @ F.T + np.asarray(Q, dtype=float)
-    return xp, 0.5 * (Pp + Pp.T)
+# re-association and contraction (FMA) only: no 'nnan'/'ninf', so NaN and inf stay IEEE
+FASTMATH = {"reassoc", "contract", "arcp", "nsz"}
 
 
-def update_joseph(
-    x: ArrayLike, P: ArrayLike, z: ArrayLike, H: ArrayLike, R: ArrayLike
-) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
-    """Measurement update in Joseph form; returns ``(x+, P+, innovation, S)``.
-
-    ``z`` (m,), ``H`` (m, n), ``R`` (m, m).  The innovation ``z - H x`` is returned as computed
-    (callers that measure angles wrap ``z`` beforehand, see :func:`update_scalar_nb`).
-    """
-    x = np.asarray(x, dtype=float)
-    P = np.asarray(P, dtype=float)
-    H = np.atleast_2d(np.asarray(H, dtype=float))
-    R = np.atleast_2d(np.asarray(R, dtype=float))
-    z = np.atleast_1d(np.asarray(z, dtype=float))
-    innov = z - H @ x
-    S = H @ P @ H.T + R
-    K = linalg.solve(S, H @ P, assume_a="pos").T
-    ikh = np.eye(x.size) - K @ H
-    Pn = ikh @ P @ ikh.T + K @ R @ K.T
-    return x + K @ innov, 0.5 * (Pn + Pn.T), innov, S
+def workspace(n: int) -> NDArray:
+    """A scratch buffer of shape (n + 5, n) that every predict/update kernel here accepts."""
+    return np.zeros((n + 5, n))
 
 
-def update_robust_scalar(
-    x: ArrayLike, P: ArrayLike, innov: float, h: ArrayLike, r: float,
-    gate_nis: float = math.inf, huber_sigmas: float = math.inf,
-) -> tuple[FloatArray, FloatArray, float, float, float]:  # fmt: skip
-    """numpy reference of :func:`update_robust_scalar_nb`: ``(x+, P+, S, nis, weight)``."""
-    x = np.asarray(x, dtype=float)
-    P = np.asarray(P, dtype=float)
-    h = np.asarray(h, dtype=float)
-    s = float(h @ P @ h + r)
-    if not s > 0.0:
-        return x.copy(), P.copy(), s, math.nan, 0.0
-    nis = innov * innov / s
-    if nis > gate_nis:
-        return x.copy(), P.copy(), s, nis, 0.0
-    z = math.sqrt(nis)
-    w = 1.0 if z <= huber_sigmas else huber_sigmas / z
-    xn, Pn, _, _ = update_joseph(x, P, [float(h @ x) + innov], h[None, :], [[r / w]])
-    return xn, Pn, s, nis, w
-
-
-def nis(innov: ArrayLike, S: ArrayLike) -> FloatArray:
-    """Normalised innovation squared ``nu' S^-1 nu`` (Bar-Shalom et al. 2001, eq 5.4.1-2).
-
-    Scalars: ``innov`` (N,), ``S`` (N,) give (N,); vectors: ``innov`` (N, m), ``S`` (N, m, m)
-    give (N,).  NaN where there was no update (NaN innovation or S <= 0).
-    """
-    nu = np.asarray(innov, dtype=float)
-    s = np.asarray(S, dtype=float)
-    if nu.ndim == s.ndim:
-        with np.errstate(invalid="ignore", divide="ignore"):
-            return np.where(s > 0, nu * nu / np.where(s > 0, s, 1.0), np.nan)
-    out = np.full(nu.shape[0], np.nan)
-    ok = np.isfinite(nu).all(axis=1) & np.isfinite(s).all(axis=(1, 2))
-    if ok.any():
-        sol = np.linalg.solve(s[ok], nu[ok][..., None])[..., 0]
-        out[ok] = np.sum(nu[ok] * sol, axis=1)
-    return out
-
-
-def cholesky(A: ArrayLike) -> FloatArray:
-    """numpy reference of :func:`cholesky_nb` (positive-definite A)."""
-    return np.asarray(np.linalg.cholesky(np.asarray(A, dtype=float)), dtype=float)
-
-
-def rts_smooth(
-    x_post: ArrayLike, P_post: ArrayLike, x_prior: ArrayLike, P_prior: ArrayLike, F: ArrayLike
-) -> tuple[FloatArray, FloatArray]:
-    """Rauch-Tung-Striebel fixed-interval smoother (Rauch, Tung & Striebel, AIAA J. 3(8),
-    1965; Simon 2006, eqs 9.120-9.124), numpy reference.
-
-    ``x_post`` (N, n), ``P_post`` (N, n, n): filtered estimates after each row's update;
-    ``x_prior``/``P_prior``: the predictions of each row (row 0 unused); ``F`` (N, n, n): the
-    transition from row k-1 to k (row 0 unused).  Backwards from the last row:
-
-        C_k = P+_k F'_{k+1} (P-_{k+1})^-1
-        x^s_k = x+_k + C_k (x^s_{k+1} - x-_{k+1}),  P^s_k = P+_k + C_k (P^s_{k+1} - P-_{k+1}) C_k'
-
-    Returns ``(x_smoothed, P_smoothed)``.
-    """
-    xp = np.asarray(x_post, dtype=float)
-    Pp = np.asarray(P_post, dtype=float)
-    xm = np.asarray(x_prior, dtype=float)
-    Pm = np.asarray(P_prior, dtype=float)
-    Fa = np.asarray(F, dtype=float)
-    xs = xp.copy()
-    Ps = Pp.copy()
-    for k in range(xp.shape[0] - 2, -1, -1):
-        C = linalg.solve(Pm[k + 1], Fa[k + 1] @ Pp[k], assume_a="pos").T
-        xs[k] = xp[k] + C @ (xs[k + 1] - xm[k + 1])
-        Pk = Pp[k] + C @ (Ps[k + 1] - Pm[k + 1]) @ C.T
-        Ps[k] = 0.5 * (Pk + Pk.T)
-    return xs, Ps
+def rts_workspace(n: int) -> NDArray:
+    """Scratch space of :func:`rts_step_ws_nb`: three (n, n) matrices."""
+    return np.zeros((3, n, n))
 
 
 # ------------------------------------------------------------------------------------------
-# numba kernels (in place, for recursive loops)
+# predict
 # ------------------------------------------------------------------------------------------
-@numba.njit(cache=True)
-def predict_nb(x: NDArray, P: NDArray, F: NDArray, Q: NDArray, Gu: NDArray) -> None:
-    """In place: ``x <- F x + Gu``, ``P <- F P F' + Q`` (``Gu`` the already-multiplied input).
-
-    Written as explicit loops (no temporaries but two small work arrays) for the per-row use.
-    """
-    n = x.size
-    xn = np.empty(n)
-    FP = np.empty((n, n))
-    for i in range(n):
-        acc = Gu[i]
-        for j in range(n):
-            acc += F[i, j] * x[j]
-        xn[i] = acc
-        for j in range(n):
-            acc = 0.0
-            for k in range(n):
-                acc += F[i, k] * P[k, j]
-            FP[i, j] = acc
-    for i in range(n):
-        x[i] = xn[i]
-        for j in range(i, n):
-            acc = Q[i, j]
-            for k in range(n):
-                acc += FP[i, k] * F[j, k]
-            P[i, j] = acc
-    for i in range(n):
-        for j in range(i):
-            P[i, j] = P[j, i]
-
-
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, fastmath=FASTMATH)
 def predict_ws_nb(
     x: NDArray, P: NDArray, F: NDArray, Q: NDArray, Gu: NDArray, work: NDArray
 ) -> None:
-    """:func:`predict_nb` with caller-owned scratch ``work`` of shape (2 n + 2, n) (the shape
-    :func:`update_scalar_ws_nb` needs, so one buffer serves both): explicit loops, no
-    allocation (the per-row use in compiled filter loops)."""
+    """In place ``x <- F x + Gu``, ``P <- F P F' + Q`` (``Gu`` the already-multiplied input);
+    ``work`` at least (n + 2, n) (:func:`workspace`)."""
     n = x.size
     for i in range(n):
         acc = Gu[i]
@@ -205,10 +84,12 @@ def predict_ws_nb(
             acc += F[i, j] * x[j]
         work[0, i] = acc
         for j in range(n):
-            acc = 0.0
-            for k in range(n):
-                acc += F[i, k] * P[k, j]
-            work[2 + i, j] = acc
+            work[2 + i, j] = 0.0
+        for k in range(n):
+            f = F[i, k]
+            if f != 0.0:
+                for j in range(n):
+                    work[2 + i, j] += f * P[k, j]
     for i in range(n):
         x[i] = work[0, i]
         for j in range(i, n):
@@ -222,96 +103,100 @@ def predict_ws_nb(
 
 
 @numba.njit(cache=True)
-def predict_sparse_nb(x: NDArray, P: NDArray, x_next: NDArray, F: NDArray, Q: NDArray) -> None:
-    """In place: ``x <- x_next``, ``P <- F P F' + Q`` for a Jacobian close to the identity.
-
-    For the Jacobian of a nonlinear process model (``x_next = f(x, u, dt)`` computed by the
-    model), which is mostly the identity: with F = I + D and D sparse,
-    F P F' = A + A D' with A = P + D P, so the cost is O(n^2 + nnz(D) n) instead of O(n^3).
-    """
-    n = x.size
-    rows = np.empty(n * n, dtype=np.int64)
-    cols = np.empty(n * n, dtype=np.int64)
-    vals = np.empty(n * n)
-    nnz = 0
-    for i in range(n):
-        for k in range(n):
-            d = F[i, k] - 1.0 if i == k else F[i, k]
-            if d != 0.0:
-                rows[nnz] = i
-                cols[nnz] = k
-                vals[nnz] = d
-                nnz += 1
-    A = P.copy()  # A = P + D P
-    for e in range(nnz):
-        i, k, d = rows[e], cols[e], vals[e]
-        for j in range(n):
-            A[i, j] += d * P[k, j]
-    for i in range(n):  # P = A + A D' + Q
-        for j in range(n):
-            P[i, j] = A[i, j] + Q[i, j]
-    for e in range(nnz):
-        j, k, d = rows[e], cols[e], vals[e]
-        for i in range(n):
-            P[i, j] += A[i, k] * d
-    for i in range(n):
-        x[i] = x_next[i]
-        for j in range(i + 1, n):
-            m = 0.5 * (P[i, j] + P[j, i])
-            P[i, j] = m
-            P[j, i] = m
+def predict_nb(x: NDArray, P: NDArray, F: NDArray, Q: NDArray, Gu: NDArray) -> None:
+    """Allocating form of :func:`predict_ws_nb`."""
+    predict_ws_nb(x, P, F, Q, Gu, np.zeros((x.size + 2, x.size)))
 
 
 @numba.njit(cache=True)
-def update_scalar_nb(
-    x: NDArray, P: NDArray, innov: float, h: NDArray, r: float
+def nonzero_columns_nb(F: NDArray, rows: NDArray) -> None:
+    """``rows[i]`` <- the columns of F's non-zeros in row i, padded with -1 (``rows`` (n, n))."""
+    n = F.shape[0]
+    for i in range(n):
+        c = 0
+        for j in range(n):
+            if F[i, j] != 0.0:
+                rows[i, c] = j
+                c += 1
+        for j in range(c, rows.shape[1]):
+            rows[i, j] = -1
+
+
+@numba.njit(cache=True, fastmath=FASTMATH)
+def predict_rows_ws_nb(
+    P: NDArray, F: NDArray, rows: NDArray, q: NDArray, Pn: NDArray, tmp: NDArray
+) -> None:
+    """``Pn = F P F' + diag(q)`` using only the non-zero columns of each row of F (``rows[i]``
+    lists them, -1 pads); ``tmp`` (n, n) scratch.  The caller sets ``x- = f(x, u, dt)``."""
+    n = P.shape[0]
+    w = rows.shape[1]
+    for i in range(n):  # tmp = F P
+        for j in range(n):
+            tmp[i, j] = 0.0
+        for m in range(w):
+            col = rows[i, m]
+            if col < 0:
+                break
+            f = F[i, col]
+            for j in range(n):
+                tmp[i, j] += f * P[col, j]
+    for j in range(n):  # Pn = tmp F' (symmetric: computed for i <= j, mirrored)
+        for i in range(j + 1):
+            acc = 0.0
+            for m in range(w):
+                col = rows[j, m]
+                if col < 0:
+                    break
+                acc += tmp[i, col] * F[j, col]
+            Pn[i, j] = acc
+            Pn[j, i] = acc
+    for i in range(n):
+        Pn[i, i] += q[i]
+
+
+@numba.njit(cache=True)
+def predict_sparse_nb(x: NDArray, P: NDArray, x_next: NDArray, F: NDArray, Q: NDArray) -> None:
+    """In place ``x <- x_next``, ``P <- F P F' + Q`` for a Jacobian with few non-zeros a row
+    (a nonlinear model's: ``x_next = f(x, u, dt)`` computed by the model); finds the non-zeros
+    and runs :func:`predict_rows_ws_nb`."""
+    n = x.size
+    rows = np.empty((n, n), dtype=np.int64)
+    nonzero_columns_nb(F, rows)
+    Pn = np.empty((n, n))
+    predict_rows_ws_nb(P, F, rows, np.zeros(n), Pn, np.empty((n, n)))
+    for i in range(n):
+        x[i] = x_next[i]
+        for j in range(i, n):
+            v = Pn[i, j] + 0.5 * (Q[i, j] + Q[j, i])
+            P[i, j] = v
+            P[j, i] = v
+
+
+# ------------------------------------------------------------------------------------------
+# measurement updates
+# ------------------------------------------------------------------------------------------
+@numba.njit(cache=True, fastmath=FASTMATH)
+def update_scalar_ws_nb(
+    x: NDArray, P: NDArray, innov: float, h: NDArray, r: float, work: NDArray
 ) -> float:
     """In place Joseph-form update with one scalar measurement; returns S = h P h' + r.
 
     ``innov`` is ``z - h x`` computed by the caller (so that angle measurements can be wrapped
-    to [-pi, pi) first).  The covariance is the Joseph product
-    (I - k h) P (I - k h)' + r k k' with k = P h' / S, which for a symmetric P expands to
-    P - k (Ph)' - (Ph) k' + S k k' for any gain k (Simon 2006, eq 5.19); it is evaluated
-    elementwise on the upper triangle and mirrored, so P stays exactly symmetric, in O(n^2),
-    skipping the zero entries of ``h``.  A non-positive S (no information, or a broken
-    prior) leaves x and P unchanged.
+    to [-pi, pi) first).  The covariance is the Joseph product (I - k h) P (I - k h)' + r k k'
+    with k = P h' / S, which for a symmetric P expands to P - k (Ph)' - (Ph) k' + S k k' for
+    any gain k (Simon 2006, eq 5.19); it is evaluated elementwise on the upper triangle and
+    mirrored, so P stays exactly symmetric, in O(n^2), skipping the zero entries of ``h``.
+    ``work`` (at least 2 rows of n) holds P h' and the gain.  A non-positive S (no
+    information, or a broken prior) leaves x and P unchanged.
     """
     n = x.size
-    ph = np.zeros(n)
+    for i in range(n):
+        work[0, i] = 0.0
     for j in range(n):
         hj = h[j]
         if hj != 0.0:
             for i in range(n):
-                ph[i] += P[i, j] * hj
-    s = r
-    for i in range(n):
-        s += h[i] * ph[i]
-    if not s > 0.0:
-        return s
-    k = ph / s
-    for i in range(n):
-        x[i] += k[i] * innov
-    for i in range(n):
-        ki, phi = k[i], ph[i]
-        for j in range(i, n):
-            m = P[i, j] - ki * ph[j] - phi * k[j] + s * ki * k[j]
-            P[i, j] = m
-            P[j, i] = m
-    return s
-
-
-@numba.njit(cache=True, inline="always")
-def update_scalar_ws_nb(
-    x: NDArray, P: NDArray, innov: float, h: NDArray, r: float, work: NDArray
-) -> float:
-    """:func:`update_scalar_nb` with caller-owned scratch ``work`` (at least 2 rows of n):
-    row 0 holds P h', row 1 the gain; the same expanded Joseph form, no allocation."""
-    n = x.size
-    for i in range(n):
-        acc = 0.0
-        for j in range(n):
-            acc += P[i, j] * h[j]
-        work[0, i] = acc
+                work[0, i] += P[j, i] * hj  # P symmetric: row j = column j
     s = r
     for i in range(n):
         s += h[i] * work[0, i]
@@ -330,6 +215,26 @@ def update_scalar_ws_nb(
 
 
 @numba.njit(cache=True)
+def update_scalar_nb(x: NDArray, P: NDArray, innov: float, h: NDArray, r: float) -> float:
+    """Allocating form of :func:`update_scalar_ws_nb`."""
+    return update_scalar_ws_nb(x, P, innov, h, r, np.zeros((2, x.size)))
+
+
+@numba.njit(cache=True, fastmath=FASTMATH)
+def innovation_variance_nb(P: NDArray, h: NDArray, r: float) -> float:
+    """``S = h P h' + r``, skipping the zero entries of ``h``."""
+    n = h.size
+    s = r
+    for i in range(n):
+        if h[i] != 0.0:
+            acc = 0.0
+            for j in range(n):
+                acc += P[i, j] * h[j]
+            s += h[i] * acc
+    return s
+
+
+@numba.njit(cache=True)
 def huber_weight_nb(nis: float, threshold: float) -> float:
     """Huber weight of a scalar residual with normalised size ``sqrt(nis)``: 1 inside
     ``threshold`` (in sigmas), ``threshold / |z|`` beyond it (Huber 1964; Zoubir et al.,
@@ -341,52 +246,93 @@ def huber_weight_nb(nis: float, threshold: float) -> float:
 
 
 @numba.njit(cache=True)
-def update_robust_scalar_nb(
+def robust_weight_nb(nis: float, huber_sigmas: float, inflate_nis: float) -> float:
+    """Weight of a measurement of normalised innovation squared ``nis``: the Huber weight
+    (:func:`huber_weight_nb`) times ``inflate_nis / nis`` where ``nis > inflate_nis``.
+
+    The second factor scales the measurement variance by ``nis / inflate_nis`` (Zhang, *Image
+    Vis. Comput.* 15, 1997, sec. 3: an inverse-square IRLS weight): one outlier of many sigma
+    barely moves the state while a run of moderately surprising measurements still pulls it.
+    ``inf`` for either threshold switches that factor off."""
+    w = huber_weight_nb(nis, huber_sigmas)
+    if nis > inflate_nis:
+        w *= inflate_nis / nis
+    return w
+
+
+@numba.njit(cache=True)
+def update_robust_scalar_ws_nb(
     x: NDArray, P: NDArray, innov: float, h: NDArray, r: float, gate_nis: float,
-    huber_sigmas: float,
+    huber_sigmas: float, inflate_nis: float, work: NDArray,
 ) -> tuple[float, float, float]:  # fmt: skip
-    """Gated, Huber-weighted scalar update; returns ``(S, nis, weight)``.
+    """Gated, robustly weighted scalar update; returns ``(S, nis, weight)``.
 
     ``nis = innov^2 / S`` with S the prior innovation variance.  A measurement with
-    ``nis > gate_nis`` is rejected (weight 0, x and P unchanged).  Otherwise its noise is
-    inflated to ``r / w`` with the Huber weight ``w`` of :func:`huber_weight_nb` (1 for
-    ``huber_sigmas = inf``), i.e. one iteration of the iteratively reweighted Kalman update
-    (Karlgaard & Schaub, J. Guid. Control Dyn. 30(6), 2007, sec. III).
+    ``nis > gate_nis`` is rejected (weight 0, x and P unchanged).  Otherwise its variance is
+    ``r / w`` with ``w`` from :func:`robust_weight_nb`: one iteration of the iteratively
+    reweighted Kalman update (Karlgaard & Schaub, J. Guid. Control Dyn. 30(6), 2007, sec. III).
     """
-    n = x.size
-    s = r
-    for i in range(n):
-        acc = 0.0
-        for j in range(n):
-            acc += P[i, j] * h[j]
-        s += h[i] * acc
+    s = innovation_variance_nb(P, h, r)
     if not s > 0.0:
         return s, math.nan, 0.0
     nis = innov * innov / s
     if nis > gate_nis:
         return s, nis, 0.0
-    w = huber_weight_nb(nis, huber_sigmas)
-    update_scalar_nb(x, P, innov, h, r / w)
+    w = robust_weight_nb(nis, huber_sigmas, inflate_nis)
+    update_scalar_ws_nb(x, P, innov, h, r / w, work)
     return s, nis, w
 
 
 @numba.njit(cache=True)
-def cholesky_nb(A: NDArray) -> NDArray:
-    """Lower-triangular L with L L' = A for a small symmetric positive-definite A
-    (Cholesky-Banachiewicz).  A non-positive pivot (A not positive definite) is set to 0 with
-    its column, so a semi-definite A gives a valid factor of its positive part."""
-    n = A.shape[0]
-    L = np.zeros((n, n))
+def update_robust_scalar_nb(
+    x: NDArray, P: NDArray, innov: float, h: NDArray, r: float, gate_nis: float,
+    huber_sigmas: float,
+) -> tuple[float, float, float]:  # fmt: skip
+    """Allocating form of :func:`update_robust_scalar_ws_nb` without variance inflation."""
+    return update_robust_scalar_ws_nb(
+        x, P, innov, h, r, gate_nis, huber_sigmas, math.inf, np.zeros((2, x.size))
+    )
+
+
+@numba.njit(cache=True, fastmath=FASTMATH)
+def update_robust_pair_ws_nb(
+    x: NDArray, P: NDArray, H: NDArray, y0: float, y1: float, r: float, inflate_nis: float,
+    work: NDArray,
+) -> float:  # fmt: skip
+    """Two-row update (rows ``H[0]``, ``H[1]``, innovations ``y0``, ``y1``, ``R = r I``) whose
+    variance is scaled by ``d2 / inflate_nis`` where the 2-D Mahalanobis distance ``d2`` of the
+    innovation exceeds ``inflate_nis`` (:func:`robust_weight_nb`'s second factor); returns
+    ``d2``.  Processed as two sequential Joseph scalar updates (R diagonal: the batch update).
+    ``work`` at least (5, n) (:func:`workspace`)."""
+    n = x.size
     for i in range(n):
-        for j in range(i + 1):
-            acc = A[i, j]
-            for k in range(j):
-                acc -= L[i, k] * L[j, k]
-            if i == j:
-                L[i, i] = math.sqrt(acc) if acc > 0.0 else 0.0
-            elif L[j, j] > 0.0:
-                L[i, j] = acc / L[j, j]
-    return L
+        a = 0.0
+        b = 0.0
+        for j in range(n):
+            a += P[i, j] * H[0, j]
+            b += P[i, j] * H[1, j]
+        work[2, i] = a
+        work[3, i] = b
+    s00 = r
+    s01 = 0.0
+    s11 = r
+    for i in range(n):
+        s00 += H[0, i] * work[2, i]
+        s01 += H[0, i] * work[3, i]
+        s11 += H[1, i] * work[3, i]
+    det = s00 * s11 - s01 * s01
+    if not det > 0.0:
+        return math.nan
+    d2 = (s11 * y0 * y0 - 2.0 * s01 * y0 * y1 + s00 * y1 * y1) / det
+    rr = r if d2 <= inflate_nis else r * d2 / inflate_nis
+    for i in range(n):
+        work[4, i] = x[i]
+    update_scalar_ws_nb(x, P, y0, H[0], rr, work)
+    dy = 0.0
+    for i in range(n):
+        dy += H[1, i] * (x[i] - work[4, i])
+    update_scalar_ws_nb(x, P, y1 - dy, H[1], rr, work)
+    return d2
 
 
 @numba.njit(cache=True)
@@ -412,172 +358,202 @@ def update_vector_nb(x: NDArray, P: NDArray, innov: NDArray, H: NDArray, R: NDAr
         zw[i] = acc / L[i, i]
         Hw[i] = row / L[i, i]
     x0 = x.copy()
+    work = np.zeros((2, x.size))
     for i in range(m):
         # innovation of component i after the earlier ones: z_w,i - Hw_i (x - x_start)
         nu = zw[i]
         for c in range(x.size):
             nu -= Hw[i, c] * (x[c] - x0[c])
-        update_scalar_nb(x, P, nu, np.ascontiguousarray(Hw[i]), 1.0)
+        update_scalar_ws_nb(x, P, nu, np.ascontiguousarray(Hw[i]), 1.0, work)
     return S
+
+
+# ------------------------------------------------------------------------------------------
+# linear algebra, storage
+# ------------------------------------------------------------------------------------------
+@numba.njit(cache=True, fastmath=FASTMATH)
+def cholesky_ws_nb(A: NDArray, L: NDArray) -> None:
+    """Lower-triangular ``L`` with L L' = A for a small symmetric positive-definite A
+    (Cholesky-Banachiewicz), in place of ``L``.  A non-positive pivot (A not positive
+    definite) is set to 0 with its column, so a semi-definite A gives a valid factor of its
+    positive part."""
+    n = A.shape[0]
+    for i in range(n):
+        for j in range(n):
+            L[i, j] = 0.0
+    for i in range(n):
+        for j in range(i + 1):
+            acc = A[i, j]
+            for k in range(j):
+                acc -= L[i, k] * L[j, k]
+            if i == j:
+                L[i, i] = math.sqrt(acc) if acc > 0.0 else 0.0
+            elif L[j, j] > 0.0:
+                L[i, j] = acc / L[j, j]
+
+
+@numba.njit(cache=True)
+def cholesky_nb(A: NDArray) -> NDArray:
+    """Allocating form of :func:`cholesky_ws_nb`."""
+    L = np.zeros_like(A)
+    cholesky_ws_nb(A, L)
+    return L
+
+
+@numba.njit(cache=True, fastmath=FASTMATH)
+def cho_solve_rows_ws_nb(L: NDArray, B: NDArray) -> None:
+    """Solve ``(L L') X = B`` for every column of ``B`` at once, in place of ``B``; a zero
+    pivot (semi-definite factor) gives a zero row.  Row-oriented: the inner loops run along
+    B's contiguous rows."""
+    n = L.shape[0]
+    m = B.shape[1]
+    for i in range(n):  # L Y = B
+        for k in range(i):
+            f = L[i, k]
+            if f != 0.0:
+                for c in range(m):
+                    B[i, c] -= f * B[k, c]
+        d = L[i, i]
+        inv = 1.0 / d if d > 0.0 else 0.0
+        for c in range(m):
+            B[i, c] *= inv
+    for i in range(n - 1, -1, -1):  # L' X = Y
+        for k in range(i + 1, n):
+            f = L[k, i]
+            if f != 0.0:
+                for c in range(m):
+                    B[i, c] -= f * B[k, c]
+        d = L[i, i]
+        inv = 1.0 / d if d > 0.0 else 0.0
+        for c in range(m):
+            B[i, c] *= inv
+
+
+@numba.njit(cache=True)
+def pack_upper_nb(P: NDArray, out: NDArray) -> None:
+    """Upper triangle of the symmetric ``P`` (row by row) into ``out`` (float32 or 64)."""
+    n = P.shape[0]
+    k = 0
+    for i in range(n):
+        for j in range(i, n):
+            out[k] = P[i, j]
+            k += 1
+
+
+@numba.njit(cache=True)
+def unpack_upper_nb(packed: NDArray, P: NDArray) -> None:
+    """Inverse of :func:`pack_upper_nb` (float64 ``P``, both triangles)."""
+    n = P.shape[0]
+    k = 0
+    for i in range(n):
+        for j in range(i, n):
+            v = float(packed[k])
+            P[i, j] = v
+            P[j, i] = v
+            k += 1
+
+
+# ------------------------------------------------------------------------------------------
+# Rauch-Tung-Striebel smoother
+# ------------------------------------------------------------------------------------------
+@numba.njit(cache=True, fastmath=FASTMATH)
+def rts_gain_ws_nb(P: NDArray, Pn: NDArray, F: NDArray, rows: NDArray, B: NDArray, L: NDArray) -> None:
+    """The transposed RTS gain ``B = C' = Pn^-1 F P`` of the step from the filtered ``P`` at k
+    to its prediction ``Pn`` at k+1 (Jacobian ``F``, non-zero columns per row in ``rows`` as
+    :func:`predict_rows_ws_nb`), from the Cholesky factor of Pn (``L`` scratch; no inverse).
+    It depends on the forward pass only, so a smoother may compute it ahead of the backward
+    recursion (:func:`rts_update_ws_nb`)."""
+    n = P.shape[0]
+    w = rows.shape[1]
+    cholesky_ws_nb(Pn, L)
+    for i in range(n):  # B = F P
+        for j in range(n):
+            B[i, j] = 0.0
+        for m in range(w):
+            col = rows[i, m]
+            if col < 0:
+                break
+            f = F[i, col]
+            for j in range(n):
+                B[i, j] += f * P[col, j]
+    cho_solve_rows_ws_nb(L, B)
+
+
+@numba.njit(cache=True, fastmath=FASTMATH)
+def rts_update_ws_nb(
+    x: NDArray, P: NDArray, xn: NDArray, Pn: NDArray, B: NDArray, xs_next: NDArray,
+    Ps_next: NDArray, T: NDArray,
+) -> None:  # fmt: skip
+    """The RTS recursion with the gain ``B = C'`` of :func:`rts_gain_ws_nb`, in place of the
+    filtered ``x``, ``P`` at k: ``x += C (xs_next - xn)``, ``P += C (Ps_next - Pn) C'`` (upper
+    triangle, mirrored); ``T`` (n, n) scratch."""
+    n = x.size
+    for m in range(n):  # x += C dx = B' dx
+        d = xs_next[m] - xn[m]
+        for i in range(n):
+            x[i] += B[m, i] * d
+    for i in range(n):  # T = D B with D = Ps_next - Pn (symmetric)
+        for j in range(n):
+            T[i, j] = 0.0
+        for m in range(n):
+            d = Ps_next[i, m] - Pn[i, m]
+            for j in range(n):
+                T[i, j] += d * B[m, j]
+    for m in range(n):  # P += B' T = C D C' (upper triangle)
+        for i in range(n):
+            b = B[m, i]
+            for j in range(i, n):
+                P[i, j] += b * T[m, j]
+    for i in range(n):
+        for j in range(i):
+            P[i, j] = P[j, i]
+
+
+@numba.njit(cache=True)
+def rts_step_ws_nb(
+    x: NDArray,
+    P: NDArray,
+    xn: NDArray,
+    Pn: NDArray,
+    F: NDArray,
+    rows: NDArray,
+    xs_next: NDArray,
+    Ps_next: NDArray,
+    work: NDArray,
+) -> None:
+    """One RTS step in place of ``x``, ``P`` (filtered at k -> smoothed at k).
+
+    ``xn``, ``Pn``: the prediction from (x, P) to k+1 with Jacobian ``F`` (non-zero columns
+    per row in ``rows``, as :func:`predict_rows_ws_nb`); ``xs_next``, ``Ps_next``: the smoothed
+    state at k+1; ``work`` (3, n, n) (:func:`rts_workspace`).  :func:`rts_gain_ws_nb` then
+    :func:`rts_update_ws_nb`.
+    """
+    rts_gain_ws_nb(P, Pn, F, rows, work[1], work[0])
+    rts_update_ws_nb(x, P, xn, Pn, work[1], xs_next, Ps_next, work[2])
 
 
 @numba.njit(cache=True)
 def rts_smooth_nb(
     x_post: NDArray, P_post: NDArray, x_prior: NDArray, P_prior: NDArray, F: NDArray
 ) -> tuple[NDArray, NDArray]:
-    """Rauch-Tung-Striebel smoother (numba); see :func:`rts_smooth` for the arrays."""
-    n, m = x_post.shape
+    """Rauch-Tung-Striebel fixed-interval smoother over stored filter output (see
+    :func:`sideslip.filters.reference.rts_smooth` for the arrays): :func:`rts_step_ws_nb`
+    backwards from the last row with a dense F."""
+    N, n = x_post.shape
     xs = x_post.copy()
     Ps = P_post.copy()
-    for k in range(n - 2, -1, -1):
-        Pp = P_prior[k + 1]
-        # C = P_k F' Pp^-1, via the Cholesky factor of the (SPD) predicted covariance
-        L = cholesky_nb(Pp)
-        PF = P_post[k] @ F[k + 1].T
-        C = np.empty((m, m))
-        for r in range(m):
-            y = np.empty(m)
-            for i in range(m):  # L y = PF[r]
-                acc = PF[r, i]
-                for j in range(i):
-                    acc -= L[i, j] * y[j]
-                y[i] = acc / L[i, i] if L[i, i] > 0.0 else 0.0
-            for i in range(m - 1, -1, -1):  # L' c = y
-                acc = y[i]
-                for j in range(i + 1, m):
-                    acc -= L[j, i] * C[r, j]
-                C[r, i] = acc / L[i, i] if L[i, i] > 0.0 else 0.0
-        xs[k] = x_post[k] + C @ (xs[k + 1] - x_prior[k + 1])
-        D = Ps[k + 1] - Pp
-        Pk = P_post[k] + C @ D @ C.T
-        Ps[k] = 0.5 * (Pk + Pk.T)
+    rows = np.empty((n, n), dtype=np.int64)
+    for i in range(n):
+        for j in range(n):
+            rows[i, j] = j
+    work = np.zeros((3, n, n))
+    for k in range(N - 2, -1, -1):
+        Pk = np.ascontiguousarray(P_post[k]).copy()
+        xk = x_post[k].copy()
+        rts_step_ws_nb(
+            xk, Pk, x_prior[k + 1], P_prior[k + 1], np.ascontiguousarray(F[k + 1]), rows,
+            xs[k + 1], Ps[k + 1], work,
+        )  # fmt: skip
+        xs[k] = xk
+        Ps[k] = Pk
     return xs, Ps
-
-
-# ------------------------------------------------------------------------------------------
-# steady state
-# ------------------------------------------------------------------------------------------
-@dataclass(frozen=True)
-class SteadyState:
-    """Steady-state Kalman filter of a time-invariant system.
-
-    ``P_prior`` = P- (before a measurement update), ``P_post`` = P+ (after), ``K`` the gain
-    (n, m), ``S`` the innovation covariance (m, m).
-    """
-
-    P_prior: FloatArray
-    P_post: FloatArray
-    K: FloatArray
-    S: FloatArray
-
-
-def steady_state(F: ArrayLike, H: ArrayLike, Q: ArrayLike, R: ArrayLike) -> SteadyState:
-    """Solve the discrete algebraic Riccati equation of the filter
-
-        P- = F P- F' - F P- H' (H P- H' + R)^-1 H P- F' + Q,
-
-    (scipy's control-form DARE applied to the dual pair (F', H')), then
-    ``P+ = (I - K H) P-`` with ``K = P- H' S^-1``.  Requires (F, H) detectable and
-    (F, Q^1/2) stabilisable.
-    """
-    F = np.asarray(F, dtype=float)
-    H = np.atleast_2d(np.asarray(H, dtype=float))
-    Q = np.asarray(Q, dtype=float)
-    R = np.atleast_2d(np.asarray(R, dtype=float))
-    Pm = linalg.solve_discrete_are(F.T, H.T, Q, R)
-    Pm = 0.5 * (Pm + Pm.T)
-    S = H @ Pm @ H.T + R
-    K = linalg.solve(S, H @ Pm, assume_a="pos").T
-    ikh = np.eye(F.shape[0]) - K @ H
-    Pp = ikh @ Pm @ ikh.T + K @ R @ K.T
-    return SteadyState(Pm, 0.5 * (Pp + Pp.T), K, S)
-
-
-# ------------------------------------------------------------------------------------------
-# residual diagnostics
-# ------------------------------------------------------------------------------------------
-def normalised_innovations(innov: ArrayLike, S: ArrayLike) -> FloatArray:
-    """Scalar innovations divided by their predicted 1-sigma ``sqrt(S)``; NaN stays NaN.
-
-    For a consistent filter these are zero-mean, unit-variance and white (seed 001, sec. V:
-    "the residuals should be white noise with the following variances").
-    """
-    nu = np.asarray(innov, dtype=float)
-    s = np.asarray(S, dtype=float)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        return np.where(s > 0, nu / np.sqrt(np.where(s > 0, s, 1.0)), np.nan)
-
-
-def autocorrelation(x: ArrayLike, max_lag: int) -> FloatArray:
-    """Sample autocorrelation rho_1..rho_max_lag of a series (finite values only, mean removed)."""
-    v = np.asarray(x, dtype=float)
-    v = v[np.isfinite(v)]
-    n = v.size
-    out = np.zeros(max_lag)
-    if n <= max_lag + 1:
-        return out
-    v = v - v.mean()
-    c0 = float(v @ v)
-    if c0 <= 0.0:
-        return out
-    for k in range(1, max_lag + 1):
-        out[k - 1] = float(v[k:] @ v[:-k]) / c0
-    return out
-
-
-@dataclass(frozen=True)
-class Whiteness:
-    """Result of the Ljung-Box portmanteau test on one residual sequence.
-
-    ``q``: Ljung-Box statistic Q = n (n+2) sum_k rho_k^2 / (n-k), k = 1..lags (chi-squared
-    with ``lags`` degrees of freedom for white noise); ``p_value``; ``white``: p >= alpha;
-    ``rho``: the autocorrelations; ``colour``: sum_k rho_k^2, a size-free measure of colour
-    (about lags/n for white noise) useful to compare two vehicle files on the same drive;
-    ``frac_outside``: share of |rho_k| above the 95 % white-noise bound 1.96/sqrt(n);
-    ``nis_mean``: mean squared normalised innovation (1 for a consistent filter).
-    """
-
-    n: int
-    lags: int
-    q: float
-    p_value: float
-    white: bool
-    rho: FloatArray
-    colour: float
-    frac_outside: float
-    nis_mean: float
-
-    def as_dict(self) -> dict[str, float | int | bool | list[float]]:
-        return {
-            "n": self.n,
-            "lags": self.lags,
-            "ljung_box_q": self.q,
-            "p_value": self.p_value,
-            "white": self.white,
-            "autocorr": [float(r) for r in self.rho],
-            "colour": self.colour,
-            "frac_autocorr_outside_95": self.frac_outside,
-            "nis_mean": self.nis_mean,
-        }
-
-
-def whiteness(normalised: ArrayLike, lags: int = 20, alpha: float = 0.05) -> Whiteness:
-    """Ljung-Box whiteness test of normalised innovations (finite values only).
-
-    Fewer than ``lags + 2`` samples gives an inconclusive result (``white`` True, p = 1).
-    """
-    v = np.asarray(normalised, dtype=float)
-    v = v[np.isfinite(v)]
-    n = int(v.size)
-    if n < lags + 2:
-        return Whiteness(n, lags, 0.0, 1.0, True, np.zeros(lags), 0.0, 0.0,
-                         float(np.mean(v**2)) if n else 0.0)  # fmt: skip
-    rho = autocorrelation(v, lags)
-    k = np.arange(1, lags + 1)
-    q = float(n * (n + 2) * np.sum(rho**2 / (n - k)))
-    p = float(stats.chi2.sf(q, lags))
-    bound = 1.96 / np.sqrt(n)
-    return Whiteness(
-        n, lags, q, p, bool(p >= alpha), rho, float(np.sum(rho**2)),
-        float(np.mean(np.abs(rho) > bound)), float(np.mean(v**2)),
-    )  # fmt: skip

@@ -12,6 +12,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sideslip.filters.kalman import predict_sparse_nb, update_scalar_nb
+from sideslip.gnss import gauss_markov_nb
 from sideslip.models.kinematic import kinematic_beta, lever_arm_enu
 from sideslip.models.kinematic_ekf import (
     BD,
@@ -96,11 +97,11 @@ class LoopConsts(NamedTuple):
 # ------------------------------------------------------------------------------------------
 @numba.njit(cache=True)
 def process_noise(
-    Q: FloatArray, x: FloatArray, dt: float, c: LoopConsts, a_gm: float, a_road: float
+    Q: FloatArray, x: FloatArray, dt: float, c: LoopConsts, q_gm: float, q_road: float
 ) -> None:
     """Discrete process noise Q over ``dt`` (14 x 14): random walks of v, r and the
     calibration states, the exact Gauss-Markov variances of the GNSS error and road offset
-    (:func:`sideslip.gnss.gauss_markov`; ``a_gm``/``a_road`` the factors exp(-dt/tau)), and
+    (:func:`sideslip.gnss.gauss_markov_nb`: ``q_gm``/``q_road`` given by the caller), and
     the kinematic model's lateral-velocity error (rear slip ~ k_slip a_y, 2 tau_slip sigma^2
     dt across the heading).  Written into ``Q``, whose other entries stay zero."""
     tu = c.tuning
@@ -113,10 +114,9 @@ def process_noise(
     Q[KU, KU] = tu.understeer_walk_per_sqrt_s**2 * dt
     if c.use_gyro:
         Q[BG, BG] = tu.gyro_bias_walk_rad_s_sqrt_s**2 * dt
-    q_gm = c.gnss_gm_std**2 * (1.0 - a_gm * a_gm)
     Q[GE, GE] = q_gm
     Q[GN, GN] = q_gm
-    Q[BR, BR] = c.road_std**2 * (1.0 - a_road * a_road)
+    Q[BR, BR] = q_road
     psi_m = x[PSI] + 0.5 * dt * x[R]
     cs = math.cos(psi_m)
     sn = math.sin(psi_m)
@@ -134,9 +134,9 @@ def process_noise(
 def _predict(x: FloatArray, P: FloatArray, Q: FloatArray, dt: float, c: LoopConsts) -> None:
     """Propagate x and P over dt with the process model and its sparse Jacobian."""
     tu = c.tuning
-    a_gm = math.exp(-dt / tu.gnss_tau_s)
-    a_road = math.exp(-dt / tu.road_tau_s)
-    process_noise(Q, x, dt, c, a_gm, a_road)  # at the step's start state, as the Euler step
+    a_gm, q_gm = gauss_markov_nb(dt, tu.gnss_tau_s, c.gnss_gm_std)
+    a_road, q_road = gauss_markov_nb(dt, tu.road_tau_s, c.road_std)
+    process_noise(Q, x, dt, c, q_gm, q_road)  # at the step's start state, as the Euler step
     xn, F = transition(x, NO_INPUT, dt, c.lr, a_gm, a_road)
     predict_sparse_nb(x, P, xn, F, Q)
 

@@ -27,7 +27,7 @@ describes, an adaptive factor inflates the axle relations' variance until their 
 innovations average 1 again (time constant ``adapt_tau_s``).
 
 Robustness: every cue but standstill goes through a Huber-type update (variance times
-d2 / gate beyond ``gate_chi2``, :mod:`sideslip.filters.sparse`).  Consistency between cues:
+d2 / gate beyond ``gate_chi2``, :mod:`sideslip.filters.kalman`).  Consistency between cues:
 the windowed NIS of the axle and GNSS innovations (``sideslip.filters.consistency``) flags
 spans where the cues disagree beyond their sigma; there ``beta_std`` grows by the square root
 of the inflation and ``health`` (0 good ... 1 unusable) says so; ``params["health"]`` lists
@@ -58,6 +58,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from sideslip import gnss
 from sideslip.drive import Drive
 from sideslip.estimate import Estimate
 from sideslip.filters.consistency import nis_consistency
@@ -73,8 +74,6 @@ from sideslip.models.fused_process import (
     ILY,
     IMU,
     IN,
-    IPE,
-    IPN,
     IPSI,
     ISF,
     ISG,
@@ -181,20 +180,17 @@ def _window_mean(v: FloatArray, idx: NDArray[np.intp]) -> FloatArray:
     return np.where(c > 0, s / np.maximum(c, 1), np.nan)
 
 
-def _block_mean(v: FloatArray, idx: NDArray[np.intp]) -> FloatArray:
-    """Mean of ``v`` over rows [idx[j], idx[j+1]) (the last node: its own row)."""
-    counts = np.diff(np.append(idx, v.size))
-    return np.add.reduceat(v, idx) / counts
-
-
 def _gnss(drive: Drive, nz: FusedSettings) -> dict[str, FloatArray]:
+    """The GNSS samples of the drive from the GNSS layer (:mod:`sideslip.gnss`) as per-row
+    columns, NaN where none: ``gnss_e/n`` with their 1-sigma ``pstd`` (the white part of the
+    error, at least 0.2 m: the Gauss-Markov states carry the slow part) and the Doppler
+    ``gnss_ve/vn`` with ``vstd`` (at least 0.02 m/s)."""
     n = len(drive)
-    nan = np.full(n, np.nan)
-    out = {name: drive[name] if name in drive else nan for name in ("gnss_ve", "gnss_vn", "gnss_e", "gnss_n")}
-    vstd = drive["gnss_vel_std"] if "gnss_vel_std" in drive else np.full(n, nz.gnss_vel_sigma)
-    pstd = drive["gnss_pos_std"] if "gnss_pos_std" in drive else np.full(n, nz.gnss_pos_sigma)
-    out["vstd"] = np.where(np.isfinite(vstd) & (vstd > 0), np.maximum(vstd, 0.02), nz.gnss_vel_sigma)
-    out["pstd"] = np.where(np.isfinite(pstd) & (pstd > 0), np.maximum(pstd, 0.2), nz.gnss_pos_sigma)
+    out = {k: np.full(n, np.nan) for k in ("gnss_e", "gnss_n", "pstd", "gnss_ve", "gnss_vn", "vstd")}
+    pos = gnss.position_samples(drive, nz.gnss_pos_sigma, 0.2)
+    out["gnss_e"][pos.rows], out["gnss_n"][pos.rows], out["pstd"][pos.rows] = pos.e, pos.n, pos.sigma
+    vel = gnss.doppler_samples(drive, nz.gnss_vel_sigma, 0.02)
+    out["gnss_ve"][vel.rows], out["gnss_vn"][vel.rows], out["vstd"][vel.rows] = vel.ve, vel.vn, vel.sigma
     return out
 
 
@@ -252,7 +248,7 @@ def _process_psd(nx: int, nz: FusedSettings) -> FloatArray:
     q[ICX] = nz.cx_psd**2
     q[ISW] = nz.wheel_scale_psd**2
     q[ISG] = nz.gyro_scale_psd**2
-    q[IPE] = q[IPN] = 2.0 * nz.gnss_gm_sigma**2 / nz.gnss_gm_tau_s
+    # q[IPE], q[IPN]: the exact Gauss-Markov variance per step, in the engine
     q[IE] = q[IN] = 1e-4
     q[ISF] = q[ISR] = nz.stiffness_psd**2
     q[IMU] = nz.mu_psd**2
@@ -270,6 +266,7 @@ def _config(nz: FusedSettings, k_phi: float, calibrate: bool, has_vel: bool) -> 
     cfg[eng.C_ACCEL_VRW] = nz.accel_vrw_psd
     cfg[eng.C_GYRO_ARW] = nz.gyro_arw_psd
     cfg[eng.C_GM_TAU] = nz.gnss_gm_tau_s
+    cfg[eng.C_GM_SIGMA] = nz.gnss_gm_sigma
     cfg[eng.C_GATE] = nz.gate_chi2
     cfg[eng.C_GATE_GNSS] = nz.gnss_gate_chi2
     cfg[eng.C_GNSS_RESET] = nz.gnss_reject_reset_s
@@ -343,9 +340,7 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     elif idx[-1] != n - 1:
         idx = np.append(idx, n - 1)
     tn = t[idx]
-    inputs = np.column_stack([wz, wx, wy, ax, ay, fy_lp])
-    U = inputs[idx] if stride == 1 else np.column_stack([_block_mean(c, idx) for c in inputs.T])
-    U = np.ascontiguousarray(U)
+    U = eng.block_means(idx, (wz, wx, wy, ax, ay, fy_lp))
     vw_n = vw[idx] if stride == 1 else _window_mean(vw, idx)
     g_node = np.searchsorted(idx, g_rows, side="left").astype(np.int64)
     g_age = tn[g_node] - t[g_rows]
@@ -371,13 +366,25 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     if stride == 1:
         rows = nodes
     elif smooth:  # linear interpolation of the smoothed nodes
-        rows = {k: np.interp(t, tn, v) for k, v in nodes.items()}
+        rows = _interpolate(t, tn, nodes)
     else:  # causal: the last node, propagated to the row with the row's IMU sample
         rows = _propagate_causal(t, tn, idx, nodes, wz, wy, ax, ay, fy_lp, k_phi)
     return _estimate(
         drive, vehicle, smooth, nz, rows, xs, var, cons, tn, counts,
         k_phi, fy_lp, wz, wy, has_pos, has_vel, use_front, notes,
     )  # fmt: skip
+
+
+def _interpolate(t: FloatArray, tn: FloatArray, nodes: dict[Any, FloatArray]) -> dict[Any, FloatArray]:
+    """Every node series linearly interpolated to the rows (as ``np.interp``: held beyond the
+    first and last node), in one compiled pass over the rows."""
+    j = np.clip(np.searchsorted(tn, t, side="right") - 1, 0, max(tn.size - 2, 0))
+    if tn.size > 1:
+        w = np.clip((t - tn[j]) / (tn[j + 1] - tn[j]), 0.0, 1.0)
+    else:
+        w = np.zeros(t.size)
+    out = eng.interp_rows(j, w, np.stack(list(nodes.values())))
+    return dict(zip(nodes, out, strict=True))
 
 
 def _propagate_causal(
@@ -433,36 +440,26 @@ def _estimate(
     """Output series (from the per-row ``rows``) and params (from the nodes) of :func:`fuse`."""
     t = drive.t
     vx, vy = rows[IVX], rows[IVY]
-    speed2 = np.maximum(vx**2 + vy**2, 1e-6)
-    moving = np.abs(vx) > 0.5
-    beta = np.where(moving, np.arctan2(vy, np.maximum(np.abs(vx), 1e-3)), 0.0)
-    jx, jy = -vy / speed2, vx / speed2  # gradient of atan2(v_y, v_x)
-    var_b = jx**2 * rows[("var", IVX)] + jy**2 * rows[("var", IVY)] + 2 * jx * jy * rows["cvv"]
-    var_b = var_b * rows["inflation"]
     geom_v, _, _ = axle_geometry(vehicle)
-    r_row = wz - rows[IBG]  # bias-corrected yaw rate, rad/s
-    alpha_r = -(vy - geom_v[1] * r_row) / np.maximum(np.abs(vx), 1.0)
-    if not (has_pos or has_vel) or not smooth:
-        # without GNSS nothing but the tyre relations pins v_y, and their error is correlated
-        # over whole corners: the rear slip angle carries the relation's relative error.  The
-        # causal filter is in that state in every corner: there the GNSS course rate is
-        # a_y / v whatever the gyro's scale, so GNSS tells slip from a gyro scale error only
-        # once the turn is complete, which the smoother sees and the filter has not yet
-        var_b = var_b + (nz.force_rel * alpha_r) ** 2 + (nz.force_sigma / geom_v[3]) ** 2
-    # the rear slip scales with the learned stiffness: its remaining relative uncertainty
-    # is an error of the slip correlated over the whole drive, which the covariance's white
-    # updates do not carry (banked_turn, file 30 % soft: 2-sigma share 0.89 -> 0.9x)
+    # without GNSS nothing but the tyre relations pins v_y, and their error is correlated over
+    # whole corners: the rear slip angle carries the relation's relative error (use_tyre).
+    # The causal filter is in that state in every corner: there the GNSS course rate is
+    # a_y / v whatever the gyro's scale, so GNSS tells slip from a gyro scale error only once
+    # the turn is complete, which the smoother sees and the filter has not yet
+    use_tyre = not (has_pos or has_vel) or not smooth
+    beta, beta_std, r, roll, bank, pitch = eng.row_outputs(
+        t, vx, vy, rows[("var", IVX)], rows[("var", IVY)], rows["cvv"], rows["inflation"],
+        rows[IBG], rows[ICY], rows[ICX], rows[ISG], wz, wy, fy_lp, k_phi, geom_v[1],
+        use_tyre, nz.force_rel, nz.force_sigma / geom_v[3], nz.relaxation_m,
+        math.radians(30.0), math.radians(5.0),
+    )  # fmt: skip
+    # the rear slip scales with the learned stiffness: its remaining relative uncertainty is
+    # an error of the slip correlated over the whole drive, which the covariance's white
+    # updates do not carry (banked_turn, file 30 % soft: 2-sigma share 0.89 -> 1.00)
+    alpha_r = -(vy - geom_v[1] * (wz - rows[IBG])) / np.maximum(np.abs(vx), 1.0)
     rel_k = np.sqrt(np.maximum(rows[("var", ISR)], 0.0)) / np.maximum(rows[ISR], 0.2)
-    var_b = var_b + (rel_k * alpha_r) ** 2
-    if t.size > 2:
-        lag = nz.relaxation_m / np.maximum(np.abs(vx), 1.0) * np.abs(np.gradient(alpha_r, t))
-        var_b = var_b + lag**2
-    beta_std = np.where(moving, np.sqrt(np.maximum(var_b, 0.0)), math.radians(5.0))
-    beta_std = np.minimum(beta_std, math.radians(30.0))
-    bank = np.arcsin(np.clip(rows[ICY] / G, -0.6, 0.6))
-    roll = bank + k_phi * fy_lp
-    pitch = np.arcsin(np.clip(-rows[ICX] / G, -0.6, 0.6))
-    r = ((wz - rows[IBG]) * (1.0 - rows[ISG]) * np.cos(roll) + wy * np.sin(roll)) / np.cos(pitch)
+    widened = np.minimum(np.hypot(beta_std, rel_k * alpha_r), math.radians(30.0))
+    beta_std = np.where(np.abs(vx) > 0.5, widened, beta_std)
     series = {
         "beta": beta, "beta_std": beta_std, "health": rows["health"], "r": r, "vx": vx,
         "vy": vy, "gyro_bias": rows[IBG], "roll": roll, "bank": bank, "pitch": pitch,

@@ -6,7 +6,7 @@ of the IMU samples between them; each node then takes, in order, the wheel-speed
 update, the rear- and front-axle force relations, and every GNSS epoch stamped since the
 previous node (with its age, see :func:`sideslip.models.fused_measurements.gnss_position`).
 Models: :mod:`sideslip.models.fused_process`, :mod:`sideslip.models.fused_measurements`;
-kernels: :mod:`sideslip.filters.sparse`.
+kernels: :mod:`sideslip.filters.kalman`.
 
 Storage: the filtered state (float64) and, for the smoother, the filtered covariance's upper
 triangle in float32 per node; the backward pass recomputes each prediction (a deterministic
@@ -21,14 +21,16 @@ import math
 import numba
 import numpy as np
 
-from sideslip.filters.sparse import (
-    pack_upper,
-    predict_sparse,
-    robust_pair,
-    robust_scalar,
-    rts_step,
-    unpack_upper,
+from sideslip.filters.kalman import (
+    pack_upper_nb,
+    predict_rows_ws_nb,
+    rts_gain_ws_nb,
+    rts_update_ws_nb,
+    unpack_upper_nb,
+    update_robust_pair_ws_nb,
+    update_robust_scalar_ws_nb,
 )
+from sideslip.gnss import gauss_markov_nb
 from sideslip.models.fused_measurements import (
     A_NF,
     A_NR,
@@ -39,7 +41,7 @@ from sideslip.models.fused_measurements import (
     standstill_yaw_rate,
     wheel_speed,
 )
-from sideslip.models.fused_process import ICX, IMU, ISF, ISR, IVX, IVY, U_AX, process_into
+from sideslip.models.fused_process import ICX, IMU, IPE, IPN, ISF, ISR, IVX, IVY, U_AX, process_into
 from sideslip.vehicle import G
 
 # indices of the loop's configuration vector (filled by sideslip.methods.fused)
@@ -66,9 +68,10 @@ from sideslip.vehicle import G
     C_POS_LEVER,
     C_POS_LATENCY,
     C_WHEEL_REL,
+    C_GM_SIGMA,
     C_WHEEL_SLIP_STIFFNESS,
-) = range(23)
-N_CFG = 23
+) = range(24)
+N_CFG = 24
 
 # innovation channels recorded per node (NIS, NaN where none)
 K_WHEEL, K_REAR, K_FRONT, K_GNSS_VEL, K_GNSS_POS = range(5)
@@ -86,7 +89,18 @@ def _predict(x, P, u, dt, cfg, q, rows, xn, Pn, F, dr, qk, tmp):
     qk[2] += arw2 * dt  # gyro noise enters psi, v_x, v_y through r
     qk[IVX] += (vrw2 + vy * vy * arw2) * dt
     qk[IVY] += (vrw2 + vx * vx * arw2) * dt
-    predict_sparse(P, F, rows, qk, Pn, tmp)
+    _, q_gm = gauss_markov_nb(dt, cfg[C_GM_TAU], cfg[C_GM_SIGMA])  # GNSS position error
+    qk[IPE] += q_gm
+    qk[IPN] += q_gm
+    predict_rows_ws_nb(P, F, rows, qk, Pn, tmp)
+
+
+@numba.njit(cache=True)
+def _robust(x, P, innov, h, r, inflate_nis, work):
+    """Scalar update whose variance grows with its NIS beyond ``inflate_nis``; returns
+    ``(NIS, taken at full weight)``."""
+    _, d2, w = update_robust_scalar_ws_nb(x, P, innov, h, r, math.inf, math.inf, inflate_nis, work)
+    return d2, w >= 1.0
 
 
 @numba.njit(cache=True)
@@ -122,8 +136,8 @@ def _gate_learning(h, P, i_k, i_mu, f, f_limit, steady, cfg):
     return r_con
 
 
-@numba.njit(cache=True)
-def run_nodes(
+@numba.njit(cache=True, nogil=True)
+def forward_nodes(
     tn,
     U,
     vw,
@@ -149,9 +163,10 @@ def run_nodes(
     cfg,
     smooth,
 ):
-    """Forward EKF over the nodes and (``smooth``) the RTS pass; see the module docstring.
+    """Forward EKF over the nodes; see the module docstring.
 
-    Returns ``(xs, var, cov_vxvy, nis, counts)``: states (N, nx), their variances, the
+    Returns ``(xs, Ps, var, cov_vxvy, nis, counts)``: filtered states (N, nx), (``smooth``)
+    their covariances' packed float32 upper triangles (N, nx (nx + 1) / 2), the variances, the
     v_x-v_y covariance, the NIS per channel (N, N_CHANNELS), and counts
     ``[gnss accepted, gnss down-weighted, axle accepted, axle down-weighted]``.
     """
@@ -174,9 +189,7 @@ def run_nodes(
     qk = np.zeros(nx)
     h = np.zeros(nx)
     H2 = np.zeros((2, nx))
-    ph0 = np.zeros(nx)
-    ph1 = np.zeros(nx)
-    xb = np.zeros(nx)
+    work = np.zeros((nx + 5, nx))  # sideslip.filters.kalman.workspace
     infl_r = 1.0
     infl_f = 1.0
     gate = cfg[C_GATE]
@@ -195,12 +208,12 @@ def run_nodes(
             # ---- standstill: zero velocity and zero yaw rate
             h[:] = 0.0
             h[IVX] = 1.0
-            robust_scalar(x, P, -x[IVX], h, 1e-4, 1e300, ph0)
+            _robust(x, P, -x[IVX], h, 1e-4, 1e300, work)
             h[:] = 0.0
             h[IVY] = 1.0
-            robust_scalar(x, P, -x[IVY], h, 1e-4, 1e300, ph0)
+            _robust(x, P, -x[IVY], h, 1e-4, 1e300, work)
             r = standstill_yaw_rate(x, u, cfg[C_K_PHI], h, dr)
-            robust_scalar(x, P, -r, h, cfg[C_GYRO_NOISE] ** 2, 1e300, ph0)
+            _robust(x, P, -r, h, cfg[C_GYRO_NOISE] ** 2, 1e300, work)
         elif math.isfinite(vw[k]):
             hv = wheel_speed(x, h)
             # wheel slip and rolling-radius changes are relative to the speed; driving and
@@ -209,7 +222,7 @@ def run_nodes(
             # about 15-20; race lap: -3.5 % braking at 8 m/s^2, +6 % driving at 5 m/s^2)
             slip = abs(u[U_AX] - x[ICX]) / (G * cfg[C_WHEEL_SLIP_STIFFNESS])
             sig_w = cfg[C_WHEEL_SIGMA] + abs(vw[k]) * (cfg[C_WHEEL_REL] + slip)
-            d2, ok = robust_scalar(x, P, vw[k] - hv, h, sig_w * sig_w, gate, ph0)
+            d2, ok = _robust(x, P, vw[k] - hv, h, sig_w * sig_w, gate, work)
             nis[k, K_WHEEL] = d2
         # the axle relations' error is a model error correlated over C_AXLE_TAU seconds, not
         # white noise: their variance is quoted per C_AXLE_TAU and scaled by C_AXLE_TAU / dt,
@@ -223,7 +236,7 @@ def run_nodes(
                 r_con = _gate_learning(h, P, ISR, IMU, f_rear[k], lim, steady[k], cfg)
                 sig = cfg[C_FORCE_SIGMA] + cfg[C_FORCE_REL] * abs(f_rear[k])
                 r_ax = (sig * sig * rate_scale + r_con) * infl_r
-                d2, ok = robust_scalar(x, P, f_rear[k] - hv, h, r_ax, gate, ph0)
+                d2, ok = _robust(x, P, f_rear[k] - hv, h, r_ax, gate, work)
                 nis[k, K_REAR] = d2
                 counts[2 if ok else 3] += 1
                 infl_r = _adapt(infl_r, d2, dtk, cfg)
@@ -233,7 +246,7 @@ def run_nodes(
                 r_con = _gate_learning(h, P, ISF, IMU, f_front[k], lim, steady[k], cfg)
                 sig = cfg[C_FORCE_SIGMA] + cfg[C_FORCE_REL] * abs(f_front[k])
                 r_ax = (sig * sig * rate_scale + r_con) * infl_f
-                d2, ok = robust_scalar(x, P, f_front[k] - hv, h, r_ax, gate, ph0)
+                d2, ok = _robust(x, P, f_front[k] - hv, h, r_ax, gate, work)
                 nis[k, K_FRONT] = d2
                 counts[2 if ok else 3] += 1
                 infl_f = _adapt(infl_f, d2, dtk, cfg)
@@ -242,7 +255,7 @@ def run_nodes(
             # projection onto the constraint, Simon 2010, IET Control Theory Appl. 4(8))
             h[:] = 0.0
             h[IMU] = 1.0
-            robust_scalar(x, P, mu_floor[k] - x[IMU], h, cfg[C_MU_FLOOR_SIGMA] ** 2, 1e300, ph0)
+            _robust(x, P, mu_floor[k] - x[IMU], h, cfg[C_MU_FLOOR_SIGMA] ** 2, 1e300, work)
         # ---- GNSS epochs stamped since the previous node
         while gi < ng and g_node[gi] == k:
             if math.isfinite(g_ve[gi]) and math.isfinite(g_vn[gi]):
@@ -250,9 +263,10 @@ def run_nodes(
                 # a run of rejected epochs longer than C_GNSS_RESET means the filter, not the
                 # receiver, is wrong: the next epoch is taken at full weight
                 g_gate = cfg[C_GATE_GNSS] if tn[k] - t_vel_ok < cfg[C_GNSS_RESET] else 1e300
-                d2, ok = robust_pair(
-                    x, P, H2, g_ve[gi] - he, g_vn[gi] - hn, g_vstd[gi] ** 2, g_gate, ph0, ph1, xb
+                d2 = update_robust_pair_ws_nb(
+                    x, P, H2, g_ve[gi] - he, g_vn[gi] - hn, g_vstd[gi] ** 2, g_gate, work
                 )
+                ok = d2 <= g_gate
                 if ok:
                     t_vel_ok = tn[k]
                 nis[k, K_GNSS_VEL] = d2 if not math.isfinite(nis[k, K_GNSS_VEL]) else nis[k, K_GNSS_VEL] + d2
@@ -262,7 +276,8 @@ def run_nodes(
                 # an unidentified latency and lever arm are position noise (speed x latency)
                 r_pos = g_pstd[gi] ** 2 + cfg[C_POS_LEVER] ** 2 + (x[IVX] * cfg[C_POS_LATENCY]) ** 2
                 g_gate = cfg[C_GATE_GNSS] if tn[k] - t_pos_ok < cfg[C_GNSS_RESET] else 1e300
-                d2, ok = robust_pair(x, P, H2, g_e[gi] - he, g_n[gi] - hn, r_pos, g_gate, ph0, ph1, xb)
+                d2 = update_robust_pair_ws_nb(x, P, H2, g_e[gi] - he, g_n[gi] - hn, r_pos, g_gate, work)
+                ok = d2 <= g_gate
                 if ok:
                     t_pos_ok = tn[k]
                 nis[k, K_GNSS_POS] = d2 if not math.isfinite(nis[k, K_GNSS_POS]) else nis[k, K_GNSS_POS] + d2
@@ -273,26 +288,191 @@ def run_nodes(
                 P[i, i] = 1e-18
         xs[k] = x
         if smooth:
-            pack_upper(P, Ps[k])
+            pack_upper_nb(P, Ps[k])
         for i in range(nx):
             var[k, i] = P[i, i]
         cov_vxvy[k] = P[IVX, IVY]
-    if smooth and N > 1:
-        L = np.zeros((nx, nx))
-        B = np.zeros((nx, nx))
-        D = np.zeros((nx, nx))
-        Pk = np.zeros((nx, nx))
-        Ps_next = np.zeros((nx, nx))
-        xk = np.zeros(nx)
-        unpack_upper(Ps[N - 1], Ps_next)
-        for k in range(N - 2, -1, -1):
-            unpack_upper(Ps[k], Pk)
-            xk[:] = xs[k]
-            _predict(xk, Pk, U[k], tn[k + 1] - tn[k], cfg, q, rows, xn, Pn, F, dr, qk, tmp)
-            rts_step(xk, Pk, xn, Pn, F, rows, xs[k + 1], Ps_next, L, B, D, tmp)
-            xs[k] = xk
-            for i in range(nx):
-                var[k, i] = max(Pk[i, i], 1e-18)
-            cov_vxvy[k] = Pk[IVX, IVY]
-            Ps_next[:, :] = Pk
+    return xs, Ps, var, cov_vxvy, nis, counts
+
+
+@numba.njit(cache=True, nogil=True)
+def smoother_gains(k0, k1, xs, Ps, U, tn, cfg, q, rows, XN, PN, B):
+    """For nodes k0 <= k < k1: the prediction (``XN``, ``PN``) from the filtered node k to
+    k+1 and the transposed RTS gain ``B`` (:func:`sideslip.filters.kalman.rts_gain_ws_nb`),
+    stored at k - k0.  Depends on the forward pass only (runs beside the recursion)."""
+    nx = xs.shape[1]
+    Pk = np.zeros((nx, nx))
+    xk = np.zeros(nx)
+    F = np.zeros((nx, nx))
+    tmp = np.zeros((nx, nx))
+    L = np.zeros((nx, nx))
+    dr = np.zeros(nx)
+    qk = np.zeros(nx)
+    for k in range(k0, k1):
+        j = k - k0
+        unpack_upper_nb(Ps[k], Pk)
+        xk[:] = xs[k]
+        _predict(xk, Pk, U[k], tn[k + 1] - tn[k], cfg, q, rows, XN[j], PN[j], F, dr, qk, tmp)
+        rts_gain_ws_nb(Pk, PN[j], F, rows, B[j], L)
+
+
+@numba.njit(cache=True, nogil=True)
+def smoother_recursion(k0, k1, xs, Ps, XN, PN, B, Ps_next, var, cov_vxvy):
+    """The RTS recursion from node k1 - 1 down to k0 with the gains of :func:`smoother_gains`;
+    ``xs[k1]`` and ``Ps_next`` hold the smoothed node k1 on entry, node k0 on return.
+    Writes the smoothed states into ``xs``, their variances and the v_x-v_y covariance."""
+    nx = xs.shape[1]
+    Pk = np.zeros((nx, nx))
+    xk = np.zeros(nx)
+    T = np.zeros((nx, nx))
+    for k in range(k1 - 1, k0 - 1, -1):
+        j = k - k0
+        unpack_upper_nb(Ps[k], Pk)
+        xk[:] = xs[k]
+        rts_update_ws_nb(xk, Pk, XN[j], PN[j], B[j], xs[k + 1], Ps_next, T)
+        xs[k] = xk
+        for i in range(nx):
+            var[k, i] = max(Pk[i, i], 1e-18)
+        cov_vxvy[k] = Pk[IVX, IVY]
+        Ps_next[:, :] = Pk
+
+
+SMOOTHER_CHUNK = 2048  # nodes per block of gains (about 7 MB of float64 at 15 states)
+
+
+def run_nodes(
+    tn, U, vw, f_front, f_rear, delta, mu_floor, steady, g_node, g_age, g_e, g_n, g_pstd,
+    g_ve, g_vn, g_vstd, x0, P0, q, rows, axle, lever, cfg, smooth,
+):  # fmt: skip
+    """Forward EKF (:func:`forward_nodes`, same arguments) and, when ``smooth``, the RTS
+    smoother; returns ``(xs, var, cov_vxvy, nis, counts)``.
+
+    The smoother runs backwards in blocks of :data:`SMOOTHER_CHUNK` nodes: the gains of the
+    next (earlier) block are computed on a second thread while this block's recursion runs
+    (both compiled without the GIL); the arithmetic, and so the result, is the same as one
+    sequential pass."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    xs, Ps, var, cov_vxvy, nis, counts = forward_nodes(
+        tn, U, vw, f_front, f_rear, delta, mu_floor, steady, g_node, g_age, g_e, g_n, g_pstd,
+        g_ve, g_vn, g_vstd, x0, P0, q, rows, axle, lever, cfg, smooth,
+    )  # fmt: skip
+    N, nx = xs.shape
+    if not smooth or N < 2:
+        return xs, var, cov_vxvy, nis, counts
+    Ps_next = np.zeros((nx, nx))
+    unpack_upper_nb(Ps[N - 1], Ps_next)
+    bounds = [(max(k1 - SMOOTHER_CHUNK, 0), k1) for k1 in range(N - 1, 0, -SMOOTHER_CHUNK)]
+
+    def gains(block: tuple[int, int]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        k0, k1 = block
+        m = k1 - k0
+        XN, PN, B = np.empty((m, nx)), np.empty((m, nx, nx)), np.empty((m, nx, nx))
+        smoother_gains(k0, k1, xs, Ps, U, tn, cfg, q, rows, XN, PN, B)
+        return XN, PN, B
+
+    with ThreadPoolExecutor(max_workers=1) as pool:
+        pending = pool.submit(gains, bounds[0])
+        for i, (k0, k1) in enumerate(bounds):
+            XN, PN, B = pending.result()
+            if i + 1 < len(bounds):
+                pending = pool.submit(gains, bounds[i + 1])
+            smoother_recursion(k0, k1, xs, Ps, XN, PN, B, Ps_next, var, cov_vxvy)
     return xs, var, cov_vxvy, nis, counts
+
+
+@numba.njit(cache=True)
+def block_means(idx, cols):
+    """Node inputs: the mean of each column of ``cols`` (a tuple of per-row arrays) over the
+    rows [idx[j], idx[j+1]) of node j (the last node: its rows to the end), shape (N, len)."""
+    N = idx.size
+    n = cols[0].size
+    m = len(cols)
+    U = np.empty((N, m))
+    for j in range(N):
+        lo = idx[j]
+        hi = idx[j + 1] if j + 1 < N else n
+        for c in range(m):
+            col = cols[c]
+            acc = 0.0
+            for i in range(lo, hi):
+                acc += col[i]
+            U[j, c] = acc / max(hi - lo, 1)
+    return U
+
+
+@numba.njit(cache=True)
+def interp_rows(j, w, V):
+    """Linear interpolation of node series ``V`` (m, N) to the rows: row i lies between nodes
+    ``j[i]`` and ``j[i] + 1`` at fraction ``w[i]`` (``w`` 0 at or before the first node, 1 at
+    or after the last); returns (m, rows)."""
+    m, N = V.shape
+    out = np.empty((m, j.size))
+    for i in range(j.size):
+        a = j[i]
+        b = min(a + 1, N - 1)
+        f = w[i]
+        for c in range(m):
+            va = V[c, a]
+            out[c, i] = va + f * (V[c, b] - va)
+    return out
+
+
+@numba.njit(cache=True)
+def row_outputs(
+    t, vx, vy, var_vx, var_vy, cov_vxvy, inflation, bias_g, c_y, c_x, s_g, wz, wy, fy_lp,
+    k_phi, l_r, use_tyre, tyre_rel, tyre_floor, relaxation_m, std_moving_max, std_still,
+):  # fmt: skip
+    """Per-row outputs of the fused estimator in one pass (see ``sideslip.methods.fused``):
+    ``(beta, beta_std, r, roll, bank, pitch)``, rad and rad/s.
+
+    beta = atan2(v_y, |v_x|) where |v_x| > 0.5 m/s (0 otherwise); its variance from the
+    gradient of atan2 and the (v_x, v_y) covariance, times the consistency ``inflation``, plus
+    (``use_tyre``: no GNSS) the tyre relation's error on the rear slip angle
+    ``(tyre_rel alpha_r)^2 + tyre_floor^2`` and the tyre-relaxation lag ``relaxation_m / v_x
+    |d alpha_r / dt|`` (d/dt as ``np.gradient``: second order inside, first at the ends).
+    Roll = bank (from c_y) + k_phi * f_y; r the Euler yaw rate through roll and pitch."""
+    n = t.size
+    beta = np.empty(n)
+    beta_std = np.empty(n)
+    r = np.empty(n)
+    roll = np.empty(n)
+    bank = np.empty(n)
+    pitch = np.empty(n)
+    alpha = np.empty(n)
+    for i in range(n):
+        alpha[i] = -(vy[i] - l_r * (wz[i] - bias_g[i])) / max(abs(vx[i]), 1.0)
+    for i in range(n):
+        s2 = max(vx[i] * vx[i] + vy[i] * vy[i], 1e-6)
+        jx = -vy[i] / s2
+        jy = vx[i] / s2
+        vb = (jx * jx * var_vx[i] + jy * jy * var_vy[i] + 2.0 * jx * jy * cov_vxvy[i]) * inflation[i]
+        if use_tyre:
+            vb += (tyre_rel * alpha[i]) ** 2 + tyre_floor**2
+        if n > 2:
+            if i == 0:
+                d = (alpha[1] - alpha[0]) / (t[1] - t[0])
+            elif i == n - 1:
+                d = (alpha[n - 1] - alpha[n - 2]) / (t[n - 1] - t[n - 2])
+            else:
+                hs = t[i] - t[i - 1]
+                hd = t[i + 1] - t[i]
+                d = (hs * hs * alpha[i + 1] + (hd * hd - hs * hs) * alpha[i] - hd * hd * alpha[i - 1]) / (
+                    hs * hd * (hd + hs)
+                )
+            lag = relaxation_m / max(abs(vx[i]), 1.0) * abs(d)
+            vb += lag * lag
+        if abs(vx[i]) > 0.5:
+            beta[i] = math.atan2(vy[i], max(abs(vx[i]), 1e-3))
+            beta_std[i] = min(math.sqrt(max(vb, 0.0)), std_moving_max)
+        else:
+            beta[i] = 0.0
+            beta_std[i] = min(std_still, std_moving_max)
+        bk = math.asin(min(max(c_y[i] / G, -0.6), 0.6))
+        rl = bk + k_phi * fy_lp[i]
+        pt = math.asin(min(max(-c_x[i] / G, -0.6), 0.6))
+        bank[i] = bk
+        roll[i] = rl
+        pitch[i] = pt
+        r[i] = ((wz[i] - bias_g[i]) * (1.0 - s_g[i]) * math.cos(rl) + wy[i] * math.sin(rl)) / math.cos(pt)
+    return beta, beta_std, r, roll, bank, pitch

@@ -45,6 +45,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from sideslip.gnss import gauss_markov_nb
 from sideslip.vehicle import G
 
 NX_CORE = 15
@@ -133,7 +134,7 @@ def process_into(
     F[IVX, ICX] -= dt
     F[IVY, IVX] = -dt * r
     F[IVY, ICY] -= dt
-    decay = math.exp(-dt / gm_tau)
+    decay, _ = gauss_markov_nb(dt, gm_tau, 1.0)  # the GNSS error's Gauss-Markov factor
     F[IPE, IPE] = decay
     F[IPN, IPN] = decay
     xn[IPE] = decay * x[IPE]
