@@ -32,3 +32,19 @@ def test_a_bad_setting_is_one_clear_error():
         FusedSettings(force_noise_sigma=0.0)
     with pytest.raises(ValueError, match=r"FusedSettings.wheel_slip_stiffness = nan: expected"):
         FusedSettings(wheel_slip_stiffness=float("nan"))
+
+
+def test_force_floor_carries_the_drives_own_accelerometer_noise():
+    """A clean simulated MEMS accelerometer (0.05 m/s^2 per sample at 100 Hz, low-passed at
+    0.05 s: 0.016 m/s^2 left) barely moves the floor (under 2 %); vibration of 0.85 m/s^2
+    per sample (the Revs lap's) adds its low-passed variance 0.85^2 dt / (2 tau) = 0.072
+    m/s^2 squared, quoted per 0.05 s (tau / axle_error_tau_s = 1): floor 0.15 -> 0.31."""
+    from sideslip.methods.fused_settings import force_sigma_with_noise
+
+    rng = np.random.default_rng(5)
+    t = np.arange(40_000) * 0.01
+    nz = FusedSettings()
+    clean = force_sigma_with_noise(t, 0.05 * rng.standard_normal(t.size), 0.05, nz)
+    assert nz.force_sigma <= clean < 1.02 * nz.force_sigma
+    noisy = force_sigma_with_noise(t, 0.85 * rng.standard_normal(t.size), 0.05, nz)
+    assert noisy == pytest.approx(np.sqrt(0.15**2 + 0.85**2 * 0.01 / 0.1), rel=0.03)

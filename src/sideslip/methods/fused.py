@@ -53,6 +53,7 @@ in the drive's length.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -63,7 +64,7 @@ from sideslip.drive import Drive
 from sideslip.estimate import Estimate
 from sideslip.filters.consistency import nis_consistency
 from sideslip.methods import fused_engine as eng
-from sideslip.methods.fused_settings import FusedSettings, force_time_constant
+from sideslip.methods.fused_settings import FusedSettings, force_sigma_with_noise, force_time_constant
 from sideslip.methods.registry import SPEED, register
 from sideslip.models.fused_process import (
     IBG,
@@ -310,6 +311,7 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     geom, iz_m, notes = axle_geometry(vehicle)
     # axle forces per mass from the force and moment balance (seed 003 eqs 1-2)
     tau_f = force_time_constant(t, ay, nz.smoother_force_tau_s if smooth else nz.force_tau_s, nz)
+    nz = replace(nz, force_sigma=force_sigma_with_noise(t, ay, tau_f, nz))
     fy_lp = _low_pass(t, ay * (1.0 - G * k_phi), tau_f)
     r_dot = _backward_rate(t, wz)
     r_dot_lp = _low_pass(t, r_dot, tau_f) if nz.yaw_acceleration else np.zeros(n)

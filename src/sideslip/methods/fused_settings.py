@@ -12,7 +12,7 @@ from numpy.typing import NDArray
 
 FloatArray = NDArray[np.float64]
 
-__all__ = ["FusedSettings", "accel_noise_sigma", "force_time_constant"]
+__all__ = ["FusedSettings", "accel_noise_sigma", "force_sigma_with_noise", "force_time_constant"]
 
 
 @dataclass(frozen=True)
@@ -117,3 +117,16 @@ def force_time_constant(t: FloatArray, ay: FloatArray, floor_s: float, nz: Fused
     dt = float(np.median(np.diff(t)))
     sig = accel_noise_sigma(ay)
     return max(floor_s, dt * sig**2 / (2.0 * nz.force_noise_sigma**2))
+
+
+def force_sigma_with_noise(t: FloatArray, ay: FloatArray, tau_s: float, nz: FusedSettings) -> float:
+    """The axle relations' force floor (m/s^2 per ``axle_error_tau_s``) with the drive's own
+    accelerometer noise after the low-pass of time constant ``tau_s`` added: variance
+    sigma_a^2 dt / (2 tau), correlated over tau, so quoted per axle_error_tau_s times
+    tau / axle_error_tau_s (a simulated MEMS unit adds nothing; a real car's vibration,
+    0.85 m/s^2 per sample on the Revs lap, doubles the floor)."""
+    if t.size < 3:
+        return nz.force_sigma
+    dt = float(np.median(np.diff(t)))
+    noise_var = accel_noise_sigma(ay) ** 2 * dt / (2.0 * tau_s)
+    return math.sqrt(nz.force_sigma**2 + noise_var * max(tau_s / nz.axle_error_tau_s, 1.0))
