@@ -220,7 +220,12 @@ def forward_nodes(
             # braking slip grows with the longitudinal force, slip ratio a_x / (g C_k) for a
             # normalised longitudinal slip stiffness C_k (Pacejka 2012, sec. 1.3: C_Fk / F_z
             # about 15-20; race lap: -3.5 % braking at 8 m/s^2, +6 % driving at 5 m/s^2)
-            slip = abs(u[U_AX] - x[ICX]) / (G * cfg[C_WHEEL_SLIP_STIFFNESS])
+            # (a_x the estimated longitudinal acceleration, the reading less the offset c_x);
+            # below C_AXLE_MIN_SPEED a slip ratio is as ill-defined as a slip angle (a wheel
+            # pulling away; parking drive: a pull-away with the term had beta 1.1 -> 6.6 deg)
+            slip = 0.0
+            if abs(vw[k]) > cfg[C_AXLE_MIN_SPEED]:
+                slip = abs(u[U_AX] - x[ICX]) / (G * cfg[C_WHEEL_SLIP_STIFFNESS])
             sig_w = cfg[C_WHEEL_SIGMA] + abs(vw[k]) * (cfg[C_WHEEL_REL] + slip)
             d2, ok = _robust(x, P, vw[k] - hv, h, sig_w * sig_w, gate, work)
             nis[k, K_WHEEL] = d2
