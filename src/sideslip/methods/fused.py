@@ -34,9 +34,11 @@ of the inflation and ``health`` (0 good ... 1 unusable) says so; ``params["healt
 the spans.
 
 Noise the drive sets or the physics sizes (:mod:`sideslip.methods.fused_settings`): the axle
-forces' low-pass is as short as the drive's own accelerometer noise allows (its lag is read
-as tyre slip in every transient: 0.05 s for the smoother, 0.15 s for the causal filter, which
-has no later samples to average); the wheel speed's sigma carries the longitudinal slip
+forces' low-pass is short (its lag is read as tyre slip in every transient: 0.05 s for the
+smoother, raised where the drive's accelerometer noise needs it; 0.15 s for the causal
+filter, which has no later samples to average), and the noise it leaves, from the drive's
+own accelerometer (running estimate in the filter), enters the axle relations' variance; the
+wheel speed's sigma carries the longitudinal slip
 a_x / (g C_k) of braking and driving wheels; a stiffness the causal filter withholds in a
 transient enters the axle relation's variance (a consider parameter).  ``beta_std`` adds what
 the covariance's white updates cannot carry: the learned stiffness's remaining relative
@@ -53,7 +55,6 @@ in the drive's length.
 from __future__ import annotations
 
 import math
-from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -64,7 +65,7 @@ from sideslip.drive import Drive
 from sideslip.estimate import Estimate
 from sideslip.filters.consistency import nis_consistency
 from sideslip.methods import fused_engine as eng
-from sideslip.methods.fused_settings import FusedSettings, force_sigma_with_noise, force_time_constant
+from sideslip.methods.fused_settings import FusedSettings, force_noise_variance, force_time_constant
 from sideslip.methods.registry import SPEED, register
 from sideslip.models.fused_process import (
     IBG,
@@ -310,8 +311,10 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     k_phi = roll_gain(vehicle)
     geom, iz_m, notes = axle_geometry(vehicle)
     # axle forces per mass from the force and moment balance (seed 003 eqs 1-2)
-    tau_f = force_time_constant(t, ay, nz.smoother_force_tau_s if smooth else nz.force_tau_s, nz)
-    nz = replace(nz, force_sigma=force_sigma_with_noise(t, ay, tau_f, nz))
+    # the causal filter keeps its floor (a time constant from the whole drive's noise would
+    # read the future); the smoother's is raised where the drive's noise needs it
+    tau_f = force_time_constant(t, ay, nz.smoother_force_tau_s, nz) if smooth else nz.force_tau_s
+    force_var = force_noise_variance(t, ay, tau_f, nz, causal=not smooth)
     fy_lp = _low_pass(t, ay * (1.0 - G * k_phi), tau_f)
     r_dot = _backward_rate(t, wz)
     r_dot_lp = _low_pass(t, r_dot, tau_f) if nz.yaw_acceleration else np.zeros(n)
@@ -350,7 +353,7 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     q = _process_psd(nx, nz)
     lever = np.array(vehicle.gnss_xyz, dtype=float)
     xs, var, cov_vxvy, nis, counts = eng.run_nodes(
-        tn, U, vw_n, f_front[idx], f_rear[idx], delta[idx], mu_floor[idx], steady[idx],
+        tn, U, vw_n, f_front[idx], f_rear[idx], delta[idx], mu_floor[idx], steady[idx], force_var[idx],
         g_node, g_age, gn["gnss_e"][g_rows], gn["gnss_n"][g_rows], gn["pstd"][g_rows],
         gn["gnss_ve"][g_rows], gn["gnss_vn"][g_rows], gn["vstd"][g_rows],
         x0, P0, q, f_rows(nx), geom, lever, _config(nz, k_phi, calibrate, has_vel), smooth,

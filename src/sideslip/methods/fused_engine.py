@@ -146,6 +146,7 @@ def forward_nodes(
     delta,
     mu_floor,
     steady,
+    force_var,
     g_node,
     g_age,
     g_e,
@@ -240,7 +241,7 @@ def forward_nodes(
                 lim = max(x[IMU], 0.05) * axle[A_NR]
                 r_con = _gate_learning(h, P, ISR, IMU, f_rear[k], lim, steady[k], cfg)
                 sig = cfg[C_FORCE_SIGMA] + cfg[C_FORCE_REL] * abs(f_rear[k])
-                r_ax = (sig * sig * rate_scale + r_con) * infl_r
+                r_ax = ((sig * sig + force_var[k]) * rate_scale + r_con) * infl_r
                 d2, ok = _robust(x, P, f_rear[k] - hv, h, r_ax, gate, work)
                 nis[k, K_REAR] = d2
                 counts[2 if ok else 3] += 1
@@ -250,7 +251,7 @@ def forward_nodes(
                 lim = max(x[IMU], 0.05) * axle[A_NF]
                 r_con = _gate_learning(h, P, ISF, IMU, f_front[k], lim, steady[k], cfg)
                 sig = cfg[C_FORCE_SIGMA] + cfg[C_FORCE_REL] * abs(f_front[k])
-                r_ax = (sig * sig * rate_scale + r_con) * infl_f
+                r_ax = ((sig * sig + force_var[k]) * rate_scale + r_con) * infl_f
                 d2, ok = _robust(x, P, f_front[k] - hv, h, r_ax, gate, work)
                 nis[k, K_FRONT] = d2
                 counts[2 if ok else 3] += 1
@@ -346,7 +347,7 @@ SMOOTHER_CHUNK = 2048  # nodes per block of gains (about 7 MB of float64 at 15 s
 
 
 def run_nodes(
-    tn, U, vw, f_front, f_rear, delta, mu_floor, steady, g_node, g_age, g_e, g_n, g_pstd,
+    tn, U, vw, f_front, f_rear, delta, mu_floor, steady, force_var, g_node, g_age, g_e, g_n, g_pstd,
     g_ve, g_vn, g_vstd, x0, P0, q, rows, axle, lever, cfg, smooth,
 ):  # fmt: skip
     """Forward EKF (:func:`forward_nodes`, same arguments) and, when ``smooth``, the RTS
@@ -359,7 +360,7 @@ def run_nodes(
     from concurrent.futures import ThreadPoolExecutor
 
     xs, Ps, var, cov_vxvy, nis, counts = forward_nodes(
-        tn, U, vw, f_front, f_rear, delta, mu_floor, steady, g_node, g_age, g_e, g_n, g_pstd,
+        tn, U, vw, f_front, f_rear, delta, mu_floor, steady, force_var, g_node, g_age, g_e, g_n, g_pstd,
         g_ve, g_vn, g_vstd, x0, P0, q, rows, axle, lever, cfg, smooth,
     )  # fmt: skip
     N, nx = xs.shape

@@ -12,7 +12,7 @@ from numpy.typing import NDArray
 
 FloatArray = NDArray[np.float64]
 
-__all__ = ["FusedSettings", "accel_noise_sigma", "force_sigma_with_noise", "force_time_constant"]
+__all__ = ["FusedSettings", "accel_noise_sigma", "force_noise_variance", "force_time_constant"]
 
 
 @dataclass(frozen=True)
@@ -67,7 +67,8 @@ class FusedSettings:
     # read by the axle relations as tyre slip in every transient, so it is as short as the
     # drive's noise allows: the time constant is the larger of the floor below and the one
     # that brings the drive's own accelerometer noise (per sample, from successive
-    # differences) down to force_noise_sigma.  The causal filter keeps a longer floor: it
+    # differences) down to force_noise_sigma (smoother; the causal filter keeps its floor,
+    # a whole-drive value would read the future).  The causal filter's floor is longer: it
     # has no later samples to average noise over (measured over the comparison with both
     # vehicle files: 0.05 s costs the filter 15-20 % in mean beta RMSE and the Revs lap
     # 0.44 -> 0.75 deg; 0.15 s costs the smoother 20 % and the Revs lap 0.27 -> 0.46 deg)
@@ -119,14 +120,24 @@ def force_time_constant(t: FloatArray, ay: FloatArray, floor_s: float, nz: Fused
     return max(floor_s, dt * sig**2 / (2.0 * nz.force_noise_sigma**2))
 
 
-def force_sigma_with_noise(t: FloatArray, ay: FloatArray, tau_s: float, nz: FusedSettings) -> float:
-    """The axle relations' force floor (m/s^2 per ``axle_error_tau_s``) with the drive's own
-    accelerometer noise after the low-pass of time constant ``tau_s`` added: variance
-    sigma_a^2 dt / (2 tau), correlated over tau, so quoted per axle_error_tau_s times
-    tau / axle_error_tau_s (a simulated MEMS unit adds nothing; a real car's vibration,
-    0.85 m/s^2 per sample on the Revs lap, doubles the floor)."""
-    if t.size < 3:
-        return nz.force_sigma
+def force_noise_variance(
+    t: FloatArray, ay: FloatArray, tau_s: float, nz: FusedSettings, causal: bool
+) -> FloatArray:
+    """Per-row variance (m/s^2 squared, quoted per ``axle_error_tau_s`` like the axle
+    relations' own) that the drive's accelerometer noise leaves in the axle forces after the
+    low-pass of time constant ``tau_s``: sigma_a^2 dt / (2 tau), correlated over tau, so
+    times tau / axle_error_tau_s.  sigma_a from successive differences: over the whole drive
+    (robust, :func:`accel_noise_sigma`) off-line; for the causal filter the running mean of
+    the squared differences up to each row (a simulated MEMS unit adds almost nothing; a
+    real car's vibration, 0.85 m/s^2 per sample on the Revs lap, doubles the 0.15 floor)."""
+    n = t.size
+    if n < 3:
+        return np.zeros(n)
     dt = float(np.median(np.diff(t)))
-    noise_var = accel_noise_sigma(ay) ** 2 * dt / (2.0 * tau_s)
-    return math.sqrt(nz.force_sigma**2 + noise_var * max(tau_s / nz.axle_error_tau_s, 1.0))
+    scale = dt / (2.0 * tau_s) * max(tau_s / nz.axle_error_tau_s, 1.0)
+    if not causal:
+        return np.full(n, accel_noise_sigma(ay) ** 2 * scale)
+    d2 = np.concatenate(([0.0], np.diff(ay) ** 2))
+    d2 = np.where(np.isfinite(d2), d2, 0.0)
+    running = np.cumsum(d2) / np.maximum(np.arange(n), 1)
+    return np.asarray(0.5 * running * scale, dtype=float)
