@@ -33,6 +33,19 @@ spans where the cues disagree beyond their sigma; there ``beta_std`` grows by th
 of the inflation and ``health`` (0 good ... 1 unusable) says so; ``params["health"]`` lists
 the spans.
 
+Noise the drive sets or the physics sizes (:mod:`sideslip.methods.fused_settings`): the axle
+forces' low-pass is short (its lag is read as tyre slip in every transient: 0.05 s for the
+smoother, raised where the drive's accelerometer noise needs it; 0.15 s for the causal
+filter, which has no later samples to average), and the noise it leaves, from the drive's
+own accelerometer (running estimate in the filter), enters the axle relations' variance; the
+wheel speed's sigma carries the longitudinal slip
+a_x / (g C_k) of braking and driving wheels; a stiffness the causal filter withholds in a
+transient enters the axle relation's variance (a consider parameter).  ``beta_std`` adds what
+the covariance's white updates cannot carry: the learned stiffness's remaining relative
+uncertainty times the rear slip, the tyres' relaxation lag, and, where nothing but the tyres
+pins the slip (no GNSS; and for the causal filter in every corner, where GNSS cannot tell
+slip from a gyro scale error before the turn is complete), the relation's relative error.
+
 Discretisation and cost: the smoother steps on nodes every ``step_s`` (inputs averaged in
 between, states linearly interpolated back to every row); the filter steps on every row.
 Memory: the filtered state and the float32 upper triangle of each node's covariance; linear
@@ -42,7 +55,6 @@ in the drive's length.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, fields
 from typing import Any
 
 import numpy as np
@@ -53,6 +65,7 @@ from sideslip.drive import Drive
 from sideslip.estimate import Estimate
 from sideslip.filters.consistency import nis_consistency
 from sideslip.methods import fused_engine as eng
+from sideslip.methods.fused_settings import FusedSettings, force_noise_variance, force_time_constant
 from sideslip.methods.registry import SPEED, register
 from sideslip.models.fused_process import (
     IBG,
@@ -80,88 +93,6 @@ from sideslip.typical import slip_gain_k, understeer_gradient
 from sideslip.vehicle import G, Vehicle
 
 FloatArray = NDArray[np.float64]
-
-
-@dataclass(frozen=True)
-class FusedSettings:
-    """Noise and options of the fused estimator (SI units).  ``*_sigma``: 1-sigma per sample;
-    ``*_psd``: random-walk density per sqrt(s); ``*_tau_s``: time constants.  Defaults are
-    for a MEMS IMU, automotive wheel speeds and a u-blox M8-class receiver."""
-
-    step_s: float = 0.05  # s: node spacing (0: every row); inputs averaged between nodes
-    accel_vrw_psd: float = 0.1  # m/s/sqrt(s): accelerometer noise, vibration, roll transients
-    gyro_arw_psd: float = 5e-4  # rad/sqrt(s): angle random walk (consumer MEMS 1e-4 ... 5e-4)
-    gyro_standstill_sigma: float = 0.003  # rad/s per sample, the standstill yaw-rate update
-    gyro_bias_psd: float = 2e-5  # rad/s/sqrt(s)
-    cy_psd: float = 0.2  # m/s^2/sqrt(s): bank changes (5 deg over 50 m at 20 m/s)
-    cx_psd: float = 0.1  # m/s^2/sqrt(s): grade changes
-    wheel_scale_psd: float = 1e-5  # 1/sqrt(s)
-    gyro_scale_psd: float = 1e-5  # 1/sqrt(s)
-    stiffness_prior_sigma: float = 0.5  # relative: users' files are 20-35 % off, compliance
-    stiffness_psd: float = 2e-3  # 1/sqrt(s): tyre temperature, wear, load
-    mu_prior: float = 1.0  # dry asphalt
-    mu_prior_sigma: float = 0.35
-    mu_psd: float = 0.02  # 1/sqrt(s): patches of another surface
-    latency_prior_sigma_s: float = 0.1  # s: receivers stamp fixes 0-200 ms late
-    latency_psd: float = 1e-5  # s/sqrt(s)
-    lever_prior_sigma_m: float = 0.5  # m: antenna positions users do not state
-    lever_psd: float = 1e-5  # m/sqrt(s)
-    wheel_sigma: float = 0.05  # m/s: noise and quantisation
-    wheel_rel_sigma: float = 0.003  # fraction of the speed: wheel slip, rolling-radius changes
-    # normalised longitudinal slip stiffness C_k / F_z of the wheels that give the speed
-    # (Pacejka 2012, sec. 1.3: 15-20 for passenger-car tyres; the lower value, since the
-    # speed wheels carry only part of the load): the wheel speed's slip sigma is a_x / (g C_k)
-    wheel_slip_stiffness: float = 15.0
-    gnss_vel_sigma: float = 0.1  # m/s, when the drive has no gnss_vel_std
-    gnss_pos_sigma: float = 0.5  # m, white part, when the drive has no gnss_pos_std
-    gnss_gm_sigma: float = 1.5  # m, correlated part of the position error per axis
-    gnss_gm_tau_s: float = 60.0  # s, its correlation time
-    force_sigma: float = 0.15  # m/s^2 floor on an axle relation's residual
-    force_rel: float = 0.15  # relative error of the axle forces (load transfer, camber, lag)
-    # tyre relaxation length: the axle relations take the force as instantaneous, real tyres
-    # build it over about one relaxation length of travel (0.5-1.5 m for passenger-car tyres,
-    # Pacejka 2012, sec. 7.2), so in transients the relation is wrong by about
-    # relaxation_m / v_x * |d alpha_r / dt|, correlated over the transient, which the
-    # covariance does not see; added to beta_std (measured over the comparison's scenarios:
-    # 2-sigma share on slalom_low_mu 0.78 -> 0.91, cr_slalom 0.77 -> 0.98; estimate unchanged)
-    relaxation_m: float = 1.0
-    axle_error_tau_s: float = 0.05  # s: correlation time of the axle relations' model error
-    gate_chi2: float = 16.0  # NIS beyond which a wheel/axle update is down-weighted (Huber-type)
-    gnss_gate_chi2: float = 16.0  # the same for GNSS (2 dof)
-    gnss_reject_reset_s: float = 0.5  # s: after this long without an accepted epoch, accept
-    standstill_speed: float = 0.05  # m/s
-    # low-pass of the measured axle forces: it removes accelerometer noise, but its lag is
-    # read by the axle relations as tyre slip in every transient, so it is as short as the
-    # drive's noise allows: the time constant is the larger of the floor below and the one
-    # that brings the drive's own accelerometer noise (per sample, from successive
-    # differences) down to force_noise_sigma.  The causal filter keeps a longer floor: it
-    # has no later samples to average noise over (measured over the comparison: 0.05 s
-    # for the filter costs it 20 % in mean beta RMSE)
-    force_tau_s: float = 0.15  # s: the causal filter's floor
-    smoother_force_tau_s: float = 0.05  # s: the smoother's floor (tyre relaxation, 1 m at 20 m/s)
-    force_noise_sigma: float = 0.3  # m/s^2: noise of the low-passed force the floor admits
-    stiffness_curve_accel: float = 0.5  # m/s^2: an axle's stiffness learned beyond this force
-    filter_steady_jerk_m_s3: float = 2.0  # m/s^3: the filter only while it changes slower
-    mu_utilisation: float = 0.5  # mu learned only where an axle uses this share of mu F_z
-    mu_floor_sigma: float = 0.05  # 1-sigma of the constraint mu >= |a| / g where violated
-    adapt_tau_s: float = 1.0  # s: adaptive axle-noise time constant
-    adapt_max: float = 400.0  # largest variance factor of the adaptive axle noise
-    axle_min_speed: float = 3.0  # m/s: below this the slip angles are ill-defined
-    front_axle: bool = False  # use the steering angle (front-axle relation) when present
-    yaw_acceleration: bool = False  # split the axle forces with the yaw acceleration too
-    identify_gnss_calibration: bool = False  # latency and lever arm as states (positions only)
-    health_window_s: float = 2.0  # s: window of the consistency test
-
-    def __post_init__(self) -> None:
-        for f in fields(self):
-            value = getattr(self, f.name)
-            if isinstance(value, bool):
-                continue
-            ok = math.isfinite(value) and (value >= 0 if f.name == "step_s" else value > 0)
-            if not ok:
-                raise ValueError(f"FusedSettings.{f.name} = {value!r}: expected a finite number > 0")
-        if self.adapt_max < 1.0:
-            raise ValueError(f"FusedSettings.adapt_max = {self.adapt_max!r}: expected >= 1")
 
 
 def _hold(drive: Drive, name: str, fill: float = 0.0) -> FloatArray:
@@ -202,26 +133,6 @@ def _backward_rate(t: FloatArray, x: FloatArray) -> FloatArray:
     if x.size > 1:
         rate[1:] = np.diff(x) / np.diff(t)
     return rate
-
-
-def accel_noise_sigma(ay: FloatArray) -> float:
-    """White-noise sigma (m/s^2 per sample) of an accelerometer channel from its successive
-    differences (robust: 1.4826 MAD / sqrt(2); driving changes little between samples)."""
-    d = np.diff(ay[np.isfinite(ay)])
-    if d.size < 10:
-        return 0.0
-    return float(1.4826 * np.median(np.abs(d - np.median(d))) / math.sqrt(2.0))
-
-
-def force_time_constant(t: FloatArray, ay: FloatArray, floor_s: float, nz: FusedSettings) -> float:
-    """Time constant (s) of the axle forces' low-pass: ``floor_s``, or longer where the drive's
-    accelerometer noise sigma_a needs it: a first-order low-pass of white noise at step dt
-    leaves sigma_a sqrt(dt / (2 tau)), brought down to ``nz.force_noise_sigma``."""
-    if t.size < 3:
-        return floor_s
-    dt = float(np.median(np.diff(t)))
-    sig = accel_noise_sigma(ay)
-    return max(floor_s, dt * sig**2 / (2.0 * nz.force_noise_sigma**2))
 
 
 def roll_gain(vehicle: Vehicle) -> float:
@@ -405,7 +316,10 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     k_phi = roll_gain(vehicle)
     geom, iz_m, notes = axle_geometry(vehicle)
     # axle forces per mass from the force and moment balance (seed 003 eqs 1-2)
-    tau_f = force_time_constant(t, ay, nz.smoother_force_tau_s if smooth else nz.force_tau_s, nz)
+    # the causal filter keeps its floor (a time constant from the whole drive's noise would
+    # read the future); the smoother's is raised where the drive's noise needs it
+    tau_f = force_time_constant(t, ay, nz.smoother_force_tau_s, nz) if smooth else nz.force_tau_s
+    force_var = force_noise_variance(t, ay, tau_f, nz, causal=not smooth)
     fy_lp = _low_pass(t, ay * (1.0 - G * k_phi), tau_f)
     r_dot = _backward_rate(t, wz)
     r_dot_lp = _low_pass(t, r_dot, tau_f) if nz.yaw_acceleration else np.zeros(n)
@@ -440,9 +354,9 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     x0, P0 = _initial_state(drive, vw, nx, nz)
     q = _process_psd(nx, nz)
     lever = np.array(vehicle.gnss_xyz, dtype=float)
-    node_inputs = (f_front[idx], f_rear[idx], delta[idx], mu_floor[idx], steady[idx])
+    node_inputs = (f_front[idx], f_rear[idx], delta[idx], mu_floor[idx], steady[idx], force_var[idx])
     # the per-row node inputs are no longer needed: free them before the filter runs
-    del f_front, f_rear, delta, mu_floor, steady, jerk, r_dot, r_dot_lp, vw, raw, wx
+    del f_front, f_rear, delta, mu_floor, steady, force_var, jerk, r_dot, r_dot_lp, vw, raw, wx
     xs, var, cov_vxvy, nis, counts = eng.run_nodes(
         tn, U, vw_n, *node_inputs, g_node, g_age, gn["gnss_e"], gn["gnss_n"], gn["pstd"],
         gn["gnss_ve"], gn["gnss_vn"], gn["vstd"], x0, P0, q, f_rows(nx), geom, lever,
@@ -583,7 +497,7 @@ def _estimate(
     # The rear slip also scales with the learned stiffness: its remaining relative
     # uncertainty is an error of the slip correlated over the whole drive, which the
     # covariance's white updates do not carry (banked_turn, file 30 % soft: 2-sigma share
-    # 0.89 -> 0.9x)
+    # 0.89 -> 1.00)
     j, w, aux_nodes = aux
     beta, beta_std, r, roll, bank, pitch = eng.row_outputs(
         t, vx, vy, rows[IBG], wz, wy, fy_lp, j, w, aux_nodes, k_phi, geom_v[1],

@@ -68,8 +68,8 @@ from sideslip.vehicle import G
     C_POS_LEVER,
     C_POS_LATENCY,
     C_WHEEL_REL,
-    C_WHEEL_SLIP_STIFFNESS,
     C_GM_SIGMA,
+    C_WHEEL_SLIP_STIFFNESS,
 ) = range(24)
 N_CFG = 24
 
@@ -146,6 +146,7 @@ def forward_nodes(
     delta,
     mu_floor,
     steady,
+    force_var,
     g_node,
     g_age,
     g_e,
@@ -220,7 +221,12 @@ def forward_nodes(
             # braking slip grows with the longitudinal force, slip ratio a_x / (g C_k) for a
             # normalised longitudinal slip stiffness C_k (Pacejka 2012, sec. 1.3: C_Fk / F_z
             # about 15-20; race lap: -3.5 % braking at 8 m/s^2, +6 % driving at 5 m/s^2)
-            slip = abs(u[U_AX] - x[ICX]) / (G * cfg[C_WHEEL_SLIP_STIFFNESS])
+            # (a_x the estimated longitudinal acceleration, the reading less the offset c_x);
+            # below C_AXLE_MIN_SPEED a slip ratio is as ill-defined as a slip angle (a wheel
+            # pulling away; parking drive: a pull-away with the term had beta 1.1 -> 6.6 deg)
+            slip = 0.0
+            if abs(vw[k]) > cfg[C_AXLE_MIN_SPEED]:
+                slip = abs(u[U_AX] - x[ICX]) / (G * cfg[C_WHEEL_SLIP_STIFFNESS])
             sig_w = cfg[C_WHEEL_SIGMA] + abs(vw[k]) * (cfg[C_WHEEL_REL] + slip)
             d2, ok = _robust(x, P, vw[k] - hv, h, sig_w * sig_w, gate, work)
             nis[k, K_WHEEL] = d2
@@ -235,7 +241,7 @@ def forward_nodes(
                 lim = max(x[IMU], 0.05) * axle[A_NR]
                 r_con = _gate_learning(h, P, ISR, IMU, f_rear[k], lim, steady[k], cfg)
                 sig = cfg[C_FORCE_SIGMA] + cfg[C_FORCE_REL] * abs(f_rear[k])
-                r_ax = (sig * sig * rate_scale + r_con) * infl_r
+                r_ax = ((sig * sig + force_var[k]) * rate_scale + r_con) * infl_r
                 d2, ok = _robust(x, P, f_rear[k] - hv, h, r_ax, gate, work)
                 nis[k, K_REAR] = d2
                 counts[2 if ok else 3] += 1
@@ -245,7 +251,7 @@ def forward_nodes(
                 lim = max(x[IMU], 0.05) * axle[A_NF]
                 r_con = _gate_learning(h, P, ISF, IMU, f_front[k], lim, steady[k], cfg)
                 sig = cfg[C_FORCE_SIGMA] + cfg[C_FORCE_REL] * abs(f_front[k])
-                r_ax = (sig * sig * rate_scale + r_con) * infl_f
+                r_ax = ((sig * sig + force_var[k]) * rate_scale + r_con) * infl_f
                 d2, ok = _robust(x, P, f_front[k] - hv, h, r_ax, gate, work)
                 nis[k, K_FRONT] = d2
                 counts[2 if ok else 3] += 1
@@ -341,7 +347,7 @@ SMOOTHER_CHUNK = 2048  # nodes per block of gains (about 7 MB of float64 at 15 s
 
 
 def run_nodes(
-    tn, U, vw, f_front, f_rear, delta, mu_floor, steady, g_node, g_age, g_e, g_n, g_pstd,
+    tn, U, vw, f_front, f_rear, delta, mu_floor, steady, force_var, g_node, g_age, g_e, g_n, g_pstd,
     g_ve, g_vn, g_vstd, x0, P0, q, rows, axle, lever, cfg, smooth,
 ):  # fmt: skip
     """Forward EKF (:func:`forward_nodes`, same arguments) and, when ``smooth``, the RTS
@@ -354,7 +360,7 @@ def run_nodes(
     from concurrent.futures import ThreadPoolExecutor
 
     xs, Ps, var, cov_vxvy, nis, counts = forward_nodes(
-        tn, U, vw, f_front, f_rear, delta, mu_floor, steady, g_node, g_age, g_e, g_n, g_pstd,
+        tn, U, vw, f_front, f_rear, delta, mu_floor, steady, force_var, g_node, g_age, g_e, g_n, g_pstd,
         g_ve, g_vn, g_vstd, x0, P0, q, rows, axle, lever, cfg, smooth,
     )  # fmt: skip
     N, nx = xs.shape

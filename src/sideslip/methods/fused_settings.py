@@ -1,0 +1,143 @@
+"""Settings of the fused estimator (:mod:`sideslip.methods.fused`) and the choices they make
+against the drive: the noise of every cue, the priors of the identified states, and the time
+constant of the axle forces' low-pass, set by the drive's own accelerometer noise."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, fields
+
+import numpy as np
+from numpy.typing import NDArray
+
+FloatArray = NDArray[np.float64]
+
+__all__ = ["FusedSettings", "accel_noise_sigma", "force_noise_variance", "force_time_constant"]
+
+
+@dataclass(frozen=True)
+class FusedSettings:
+    """Noise and options of the fused estimator (SI units).  ``*_sigma``: 1-sigma per sample;
+    ``*_psd``: random-walk density per sqrt(s); ``*_tau_s``: time constants.  Defaults are
+    for a MEMS IMU, automotive wheel speeds and a u-blox M8-class receiver."""
+
+    step_s: float = 0.05  # s: node spacing (0: every row); inputs averaged between nodes
+    accel_vrw_psd: float = 0.1  # m/s/sqrt(s): accelerometer noise, vibration, roll transients
+    gyro_arw_psd: float = 5e-4  # rad/sqrt(s): angle random walk (consumer MEMS 1e-4 ... 5e-4)
+    gyro_standstill_sigma: float = 0.003  # rad/s per sample, the standstill yaw-rate update
+    gyro_bias_psd: float = 2e-5  # rad/s/sqrt(s)
+    cy_psd: float = 0.2  # m/s^2/sqrt(s): bank changes (5 deg over 50 m at 20 m/s)
+    cx_psd: float = 0.1  # m/s^2/sqrt(s): grade changes
+    wheel_scale_psd: float = 1e-5  # 1/sqrt(s)
+    gyro_scale_psd: float = 1e-5  # 1/sqrt(s)
+    stiffness_prior_sigma: float = 0.5  # relative: users' files are 20-35 % off, compliance
+    stiffness_psd: float = 2e-3  # 1/sqrt(s): tyre temperature, wear, load
+    mu_prior: float = 1.0  # dry asphalt
+    mu_prior_sigma: float = 0.35
+    mu_psd: float = 0.02  # 1/sqrt(s): patches of another surface
+    latency_prior_sigma_s: float = 0.1  # s: receivers stamp fixes 0-200 ms late
+    latency_psd: float = 1e-5  # s/sqrt(s)
+    lever_prior_sigma_m: float = 0.5  # m: antenna positions users do not state
+    lever_psd: float = 1e-5  # m/sqrt(s)
+    wheel_sigma: float = 0.05  # m/s: noise and quantisation
+    wheel_rel_sigma: float = 0.003  # fraction of the speed: wheel slip, rolling-radius changes
+    # normalised longitudinal slip stiffness C_k / F_z of the wheels that give the speed
+    # (Pacejka 2012, sec. 1.3: 15-20 for passenger-car tyres; the lower value, since the
+    # speed wheels carry only part of the load): the wheel speed's slip sigma is a_x / (g C_k)
+    wheel_slip_stiffness: float = 15.0
+    gnss_vel_sigma: float = 0.1  # m/s, when the drive has no gnss_vel_std
+    gnss_pos_sigma: float = 0.5  # m, white part, when the drive has no gnss_pos_std
+    gnss_gm_sigma: float = 1.5  # m, correlated part of the position error per axis
+    gnss_gm_tau_s: float = 60.0  # s, its correlation time
+    force_sigma: float = 0.15  # m/s^2 floor on an axle relation's residual
+    force_rel: float = 0.15  # relative error of the axle forces (load transfer, camber, lag)
+    # tyre relaxation length: the axle relations take the force as instantaneous, real tyres
+    # build it over about one relaxation length of travel (0.5-1.5 m for passenger-car tyres,
+    # Pacejka 2012, sec. 7.2), so in transients the relation is wrong by about
+    # relaxation_m / v_x * |d alpha_r / dt|, correlated over the transient, which the
+    # covariance does not see; added to beta_std (measured over the comparison's scenarios:
+    # 2-sigma share on slalom_low_mu 0.78 -> 0.91, cr_slalom 0.77 -> 0.98; estimate unchanged)
+    relaxation_m: float = 1.0
+    axle_error_tau_s: float = 0.05  # s: correlation time of the axle relations' model error
+    gate_chi2: float = 16.0  # NIS beyond which a wheel/axle update is down-weighted (Huber-type)
+    gnss_gate_chi2: float = 16.0  # the same for GNSS (2 dof)
+    gnss_reject_reset_s: float = 0.5  # s: after this long without an accepted epoch, accept
+    standstill_speed: float = 0.05  # m/s
+    # low-pass of the measured axle forces: it removes accelerometer noise, but its lag is
+    # read by the axle relations as tyre slip in every transient, so it is as short as the
+    # drive's noise allows: the time constant is the larger of the floor below and the one
+    # that brings the drive's own accelerometer noise (per sample, from successive
+    # differences) down to force_noise_sigma (smoother; the causal filter keeps its floor,
+    # a whole-drive value would read the future).  The causal filter's floor is longer: it
+    # has no later samples to average noise over (measured over the comparison with both
+    # vehicle files: 0.05 s costs the filter 15-20 % in mean beta RMSE and the Revs lap
+    # 0.44 -> 0.75 deg; 0.15 s costs the smoother 20 % and the Revs lap 0.27 -> 0.46 deg)
+    force_tau_s: float = 0.15  # s: the causal filter's floor
+    smoother_force_tau_s: float = 0.05  # s: the smoother's floor (tyre relaxation, 1 m at 20 m/s)
+    force_noise_sigma: float = 0.3  # m/s^2: noise of the low-passed force the floor admits
+    stiffness_curve_accel: float = 0.5  # m/s^2: an axle's stiffness learned beyond this force
+    filter_steady_jerk_m_s3: float = 2.0  # m/s^3: the filter only while it changes slower
+    mu_utilisation: float = 0.5  # mu learned only where an axle uses this share of mu F_z
+    mu_floor_sigma: float = 0.05  # 1-sigma of the constraint mu >= |a| / g where violated
+    adapt_tau_s: float = 1.0  # s: adaptive axle-noise time constant
+    adapt_max: float = 400.0  # largest variance factor of the adaptive axle noise
+    axle_min_speed: float = 3.0  # m/s: below this the slip angles are ill-defined
+    front_axle: bool = False  # use the steering angle (front-axle relation) when present
+    yaw_acceleration: bool = False  # split the axle forces with the yaw acceleration too
+    identify_gnss_calibration: bool = False  # latency and lever arm as states (positions only)
+    health_window_s: float = 2.0  # s: window of the consistency test
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if isinstance(value, bool):
+                continue
+            ok = math.isfinite(value) and (value >= 0 if f.name == "step_s" else value > 0)
+            if not ok:
+                raise ValueError(f"FusedSettings.{f.name} = {value!r}: expected a finite number > 0")
+        if self.adapt_max < 1.0:
+            raise ValueError(f"FusedSettings.adapt_max = {self.adapt_max!r}: expected >= 1")
+
+
+
+def accel_noise_sigma(ay: FloatArray) -> float:
+    """White-noise sigma (m/s^2 per sample) of an accelerometer channel from its successive
+    differences (robust: 1.4826 MAD / sqrt(2); driving changes little between samples)."""
+    d = np.diff(ay[np.isfinite(ay)])
+    if d.size < 10:
+        return 0.0
+    return float(1.4826 * np.median(np.abs(d - np.median(d))) / math.sqrt(2.0))
+
+
+def force_time_constant(t: FloatArray, ay: FloatArray, floor_s: float, nz: FusedSettings) -> float:
+    """Time constant (s) of the axle forces' low-pass: ``floor_s``, or longer where the drive's
+    accelerometer noise sigma_a needs it: a first-order low-pass of white noise at step dt
+    leaves sigma_a sqrt(dt / (2 tau)), brought down to ``nz.force_noise_sigma``."""
+    if t.size < 3:
+        return floor_s
+    dt = float(np.median(np.diff(t)))
+    sig = accel_noise_sigma(ay)
+    return max(floor_s, dt * sig**2 / (2.0 * nz.force_noise_sigma**2))
+
+
+def force_noise_variance(
+    t: FloatArray, ay: FloatArray, tau_s: float, nz: FusedSettings, causal: bool
+) -> FloatArray:
+    """Per-row variance (m/s^2 squared, quoted per ``axle_error_tau_s`` like the axle
+    relations' own) that the drive's accelerometer noise leaves in the axle forces after the
+    low-pass of time constant ``tau_s``: sigma_a^2 dt / (2 tau), correlated over tau, so
+    times tau / axle_error_tau_s.  sigma_a from successive differences: over the whole drive
+    (robust, :func:`accel_noise_sigma`) off-line; for the causal filter the running mean of
+    the squared differences up to each row (a simulated MEMS unit adds almost nothing; a
+    real car's vibration, 0.85 m/s^2 per sample on the Revs lap, doubles the 0.15 floor)."""
+    n = t.size
+    if n < 3:
+        return np.zeros(n)
+    dt = float(np.median(np.diff(t)))
+    scale = dt / (2.0 * tau_s) * max(tau_s / nz.axle_error_tau_s, 1.0)
+    if not causal:
+        return np.full(n, accel_noise_sigma(ay) ** 2 * scale)
+    d2 = np.concatenate(([0.0], np.diff(ay) ** 2))
+    d2 = np.where(np.isfinite(d2), d2, 0.0)
+    running = np.cumsum(d2) / np.maximum(np.arange(n), 1)
+    return np.asarray(0.5 * running * scale, dtype=float)

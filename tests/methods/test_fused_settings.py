@@ -1,0 +1,57 @@
+"""The fused estimator's settings and what they choose against the drive."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from sideslip.methods.fused import _low_pass
+from sideslip.methods.fused_settings import FusedSettings, accel_noise_sigma, force_time_constant
+
+
+def test_force_low_pass_is_as_short_as_the_accelerometer_noise_allows():
+    """The axle forces' low-pass: the floor for a clean accelerometer; for a noisy one (a real
+    car's vibration: the Revs lap reads about 0.85 m/s^2 per sample) the time constant whose
+    first-order low-pass leaves force_noise_sigma of the noise, checked by filtering white
+    noise (analytic sigma sqrt(dt / (2 tau)); 2 % tolerance: 40 000 samples)."""
+    rng = np.random.default_rng(3)
+    t = np.arange(40_000) * 0.01
+    nz = FusedSettings()
+    clean = 0.05 * rng.standard_normal(t.size)
+    assert accel_noise_sigma(clean) == pytest.approx(0.05, rel=0.03)
+    assert force_time_constant(t, clean, 0.05, nz) == 0.05
+    noisy = 3.0 * rng.standard_normal(t.size)
+    tau = force_time_constant(t, noisy, 0.05, nz)
+    assert tau == pytest.approx(0.01 * 9.0 / (2 * nz.force_noise_sigma**2), rel=0.05)
+    assert np.std(_low_pass(t, noisy, tau)[100:]) == pytest.approx(nz.force_noise_sigma, rel=0.05)
+
+
+def test_a_bad_setting_is_one_clear_error():
+    """Every numeric field must be finite and > 0 (step_s >= 0); the message names it."""
+    with pytest.raises(ValueError, match=r"FusedSettings.force_noise_sigma = 0.0: expected a finite number > 0"):
+        FusedSettings(force_noise_sigma=0.0)
+    with pytest.raises(ValueError, match=r"FusedSettings.wheel_slip_stiffness = nan: expected"):
+        FusedSettings(wheel_slip_stiffness=float("nan"))
+
+
+def test_force_noise_variance_is_the_drives_own_accelerometer_noise():
+    """A clean simulated MEMS accelerometer (0.05 m/s^2 per sample at 100 Hz, low-passed at
+    0.05 s) adds 0.05^2 dt / (2 tau) = 6e-5 (m/s^2)^2 to the axle relations; vibration of 0.85
+    m/s^2 per sample (the Revs lap's) adds 0.072 (tau / axle_error_tau_s = 1), the 0.15 floor
+    doubled in sigma.  The causal form (running mean of squared differences up to each row)
+    converges to the same value and at row k uses rows up to k only (5 % tolerances: 40 000
+    samples; the running mean over the first 1 000 rows)."""
+    from sideslip.methods.fused_settings import force_noise_variance
+
+    rng = np.random.default_rng(5)
+    t = np.arange(40_000) * 0.01
+    nz = FusedSettings()
+    clean = force_noise_variance(t, 0.05 * rng.standard_normal(t.size), 0.05, nz, causal=False)
+    assert clean == pytest.approx(np.full(t.size, 0.05**2 * 0.1), rel=0.05)
+    ay = 0.85 * rng.standard_normal(t.size)
+    offline = force_noise_variance(t, ay, 0.05, nz, causal=False)
+    assert offline[0] == pytest.approx(0.85**2 * 0.1, rel=0.05)
+    causal = force_noise_variance(t, ay, 0.05, nz, causal=True)
+    assert causal[-1] == pytest.approx(0.85**2 * 0.1, rel=0.05)
+    early = force_noise_variance(t[:1000], ay[:1000], 0.05, nz, causal=True)
+    np.testing.assert_allclose(causal[:1000], early, rtol=1e-12)
