@@ -30,7 +30,8 @@ def test_node_interpolation_equals_np_interp_including_the_ends() -> None:
     j, w = _node_weights(t, tn)
     rows = eng.interp_rows(j, w, np.stack(list(nodes.values())))
     for row, v in zip(rows, nodes.values(), strict=True):
-        np.testing.assert_allclose(row, np.interp(t, tn, v), rtol=1e-12, atol=1e-14)
+        # the fraction is float32: at most ~6e-8 of one node step's change
+        np.testing.assert_allclose(row, np.interp(t, tn, v), rtol=0, atol=1e-7 * np.ptp(v))
 
 
 def test_row_outputs_equal_the_numpy_formulas() -> None:

@@ -369,21 +369,24 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     dof = np.where(np.isfinite(chan), dof_per, 0.0).sum(axis=1)
     nis_sum = np.where(np.isfinite(chan), chan, 0.0).sum(axis=1)
     cons = nis_consistency(tn, nis_sum, dof, window_s=nz.health_window_s, causal=not smooth)
-    # series output on every row; the others (AUX_KEYS) enter the row outputs from the nodes
-    nodes: dict[Any, FloatArray] = {i: xs[:, i] for i in (IE, IN, IPSI, IVX, IVY, IBG)}
+    # series output on every row (position only with fixes, yaw only with GNSS: without
+    # them neither is observable); the others (AUX_KEYS) enter the row outputs from the nodes
+    keep = [IVX, IVY, IBG] + ([IPSI] if has_pos or has_vel else []) + ([IE, IN] if has_pos else [])
+    nodes: dict[Any, FloatArray] = {i: xs[:, i] for i in keep}
     # 1-sigma of yaw and position at the nodes, interpolated as such (no per-row variances)
-    nodes.update({("std", i): np.sqrt(np.maximum(var[:, i], 0.0)) for i in (IE, IN, IPSI)})
+    nodes.update({("std", i): np.sqrt(np.maximum(var[:, i], 0.0)) for i in keep if i in (IE, IN, IPSI)})
     nodes.update(health=cons.health)
-    aux = {i: xs[:, i] for i in (ICY, ICX, ISG, ISR)}
+    aux: dict[Any, FloatArray] = {i: xs[:, i] for i in (ICY, ICX, ISG, ISR)}
     aux.update({("var", i): var[:, i] for i in (IVX, IVY, ISR)})
     aux.update(cvv=cov_vxvy, inflation=cons.inflation)
     aux_nodes = np.stack([aux[k] for k in AUX_KEYS])
     if smooth:  # linear interpolation of the smoothed nodes
+        del ax, ay  # (the causal output's propagation only)
         j, w = _node_weights(t, tn)
         rows = dict(zip(nodes, eng.interp_rows(j, w, np.stack(list(nodes.values()))), strict=True))
     else:  # causal: the last node, propagated to the row with the row's IMU sample
-        j = np.maximum(np.searchsorted(idx, np.arange(n), side="right") - 1, 0)
-        w = np.zeros(n)
+        j = (np.searchsorted(idx, np.arange(n), side="right") - 1).clip(0).astype(np.int32)
+        w = np.zeros(n, dtype=np.float32)
         rows = _propagate_causal(t, tn, j, nodes, aux, wz, wy, ax, ay, fy_lp, k_phi)
     est = _estimate(
         drive, vehicle, smooth, nz, rows, (j, w, aux_nodes), xs, var, cons, tn, counts,
@@ -401,12 +404,12 @@ INNOVATION_CHANNELS = (
 )
 
 
-def _innovations(n: int, idx: NDArray[np.intp], nis: FloatArray) -> dict[str, NDArray[np.float32]]:
+def _innovations(n: int, idx: NDArray[np.intp], nis: FloatArray) -> dict[str, Any]:
     """The NIS of each cue the run used (before robust down-weighting; chi^2 with 1 dof for
     the wheel speed and the axle relations, 2 for GNSS velocity and position; summed where a
     node took several GNSS epochs) at its node's row, NaN on other rows; float32 (diagnostics
     kept in memory, not written to the output table)."""
-    out: dict[str, NDArray[np.float32]] = {}
+    out: dict[str, Any] = {}
     for name, k in INNOVATION_CHANNELS:
         if np.isfinite(nis[:, k]).any():
             col = np.full(n, np.nan, dtype=np.float32)
@@ -419,21 +422,22 @@ def _innovations(n: int, idx: NDArray[np.intp], nis: FloatArray) -> dict[str, ND
 AUX_KEYS: tuple[Any, ...] = (("var", IVX), ("var", IVY), "cvv", "inflation", ICY, ICX, ISG, ISR, ("var", ISR))
 
 
-def _node_weights(t: FloatArray, tn: FloatArray) -> tuple[NDArray[np.intp], FloatArray]:
+def _node_weights(t: FloatArray, tn: FloatArray) -> tuple[NDArray[np.int32], NDArray[np.float32]]:
     """Row i between nodes ``j[i]`` and ``j[i] + 1`` at fraction ``w[i]`` (as ``np.interp``:
-    held before the first and after the last node)."""
-    j = np.clip(np.searchsorted(tn, t, side="right") - 1, 0, max(tn.size - 2, 0))
+    held before the first and after the last node; int32 / float32: the fraction needs no more
+    than single precision, 1e-7 of a 50 ms node step)."""
+    j = np.clip(np.searchsorted(tn, t, side="right") - 1, 0, max(tn.size - 2, 0)).astype(np.int32)
     if tn.size > 1:
-        w = np.clip((t - tn[j]) / (tn[j + 1] - tn[j]), 0.0, 1.0)
+        w = np.clip((t - tn[j]) / (tn[j + 1] - tn[j]), 0.0, 1.0).astype(np.float32)
     else:
-        w = np.zeros(t.size)
+        w = np.zeros(t.size, dtype=np.float32)
     return j, w
 
 
 def _propagate_causal(
     t: FloatArray,
     tn: FloatArray,
-    j: NDArray[np.intp],
+    j: NDArray[np.int32],
     nodes: dict[Any, FloatArray],
     aux: dict[Any, FloatArray],
     wz: FloatArray,
@@ -452,11 +456,15 @@ def _propagate_causal(
     pitch = np.arcsin(np.clip(-c_x / G, -0.6, 0.6))
     r = ((wz - rows[IBG]) * (1.0 - aux[ISG][j]) * np.cos(roll) + wy * np.sin(roll)) / np.cos(pitch)
     del roll, pitch
-    vx, vy, psi = rows[IVX], rows[IVY], rows[IPSI]
-    c, s = np.cos(psi), np.sin(psi)
-    rows[IE] = rows[IE] + dt * (vx * c - vy * s)
-    rows[IN] = rows[IN] + dt * (vx * s + vy * c)
-    rows[IPSI] = psi + dt * r
+    vx, vy = rows[IVX], rows[IVY]
+    if IE in rows:  # position (with fixes), by the heading
+        psi = rows[IPSI]
+        c, s = np.cos(psi), np.sin(psi)
+        rows[IE] = rows[IE] + dt * (vx * c - vy * s)
+        rows[IN] = rows[IN] + dt * (vx * s + vy * c)
+        del c, s
+    if IPSI in rows:
+        rows[IPSI] = rows[IPSI] + dt * r
     rows[IVX] = vx + dt * (ax - c_x + r * vy)
     rows[IVY] = vy + dt * (ay * (1.0 - G * k_phi) - c_y - r * vx)
     return rows
@@ -468,7 +476,7 @@ def _estimate(
     smooth: bool,
     nz: FusedSettings,
     rows: dict[Any, FloatArray],
-    aux: tuple[NDArray[np.intp], FloatArray, FloatArray],
+    aux: tuple[NDArray[np.int32], NDArray[np.float32], FloatArray],
     xs: FloatArray,
     var: FloatArray,
     cons: Any,
@@ -508,7 +516,7 @@ def _estimate(
         "beta": beta, "beta_std": beta_std, "health": rows["health"], "r": r, "vx": vx,
         "vy": vy, "gyro_bias": rows[IBG], "roll": roll, "bank": bank, "pitch": pitch,
     }  # fmt: skip
-    std = {i: rows[("std", i)] for i in (IE, IN, IPSI)}
+    std = {i: rows[("std", i)] for i in (IE, IN, IPSI) if ("std", i) in rows}
     if has_pos or has_vel:  # without GNSS, heading and position are not observable
         series.update(yaw=rows[IPSI], yaw_std=std[IPSI])
     if has_pos:
