@@ -83,9 +83,9 @@ def bench_drive(
     """The cached benchmark drive of ``hours`` hours, and how long simulating/loading took.
 
     Up to ``MAX_HOURS`` the drive is simulated at that length; beyond, the one-hour drive is
-    tiled (:func:`tiled_drive`) up to ``MAX_TILED_HOURS``.  ``reference=False`` drops the
-    ``ref_*`` truth columns (:meth:`Drive.without_reference`) before tiling: what a method
-    sees, and all a speed or memory measurement needs.
+    tiled (:func:`tiled_drive`) up to ``MAX_TILED_HOURS``.  ``reference=False`` gives the
+    :meth:`~sideslip.drive.Drive.compact` drive (no ``ref_*`` truth columns, sensor channels
+    float32) before tiling: what a method reads, and all a speed or memory measurement needs.
     """
     import sideslip.simulate as sim
     from sideslip.errors import InputError
@@ -112,9 +112,7 @@ def bench_drive(
         timings["simulate_s"] = time.perf_counter() - start
         save_drive(drive, path)
     start = time.perf_counter()
-    drive = load_drive(path)
-    if not reference:
-        drive = drive.without_reference()
+    drive = load_drive(path, compact=not reference)
     timings["load_parquet_s"] = time.perf_counter() - start
     timings["rows"] = float(len(drive))
     timings["columns"] = float(len(list(drive.columns())))
@@ -168,8 +166,8 @@ def measure_method(name: str, hours: float, cache: Path | None = None) -> dict[s
     Meant for a fresh child process (:func:`measure_in_subprocess`): ``rss_before_mb`` is the
     process with the drive loaded and the method compiled (warm-up on a one-minute slice),
     ``peak_rss_mb`` the high-water mark while the method runs, ``method_mb`` their difference.
-    The drive holds what the methods read (no ``ref_*`` truth columns; sensor channels in
-    float32, :data:`sideslip.drive.SINGLE_PRECISION`); ``drive_mb`` is its size.
+    The drive holds what the methods read (:meth:`~sideslip.drive.Drive.compact`: no ``ref_*``
+    truth columns, sensor channels in float32); ``drive_mb`` is its size.
     """
     import resource
 

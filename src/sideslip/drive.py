@@ -42,17 +42,15 @@ COLUMNS: dict[str, str] = {
     "ref_e": "m", "ref_n": "m", "ref_u": "m",
     "ref_vx": "m/s", "ref_vy": "m/s", "ref_r": "rad/s", "ref_ay": "m/s^2",
 }  # fmt: skip
-# Contract columns stored in single precision (float32: a 24-bit mantissa, a relative step of
-# 6e-8, orders of magnitude below any vehicle sensor's noise or a reference's accuracy): the
-# sensor channels, the receiver's stds and the reference angles/rates that stay small.  ``t``,
-# positions (m from an origin that may be far away), geodetic input and ``ref_yaw`` (an
-# unwrapped angle that grows turn after turn) stay float64, as do the user's own columns.
-# Storage only: ``drive[name]`` always returns float64, so every method computes in double
-# precision.  Halves the drive's memory per sensor column (a 24 h, 100 Hz drive: 8.6 M rows).
+# Contract columns a compact drive (:meth:`Drive.compact`) stores in single precision (float32:
+# a 24-bit mantissa, a relative step of 6e-8, orders of magnitude below any vehicle sensor's
+# noise): the sensor channels and the receiver's stds.  ``t``, positions (m from an origin that
+# may be far away) and the user's own columns stay float64.  Storage only: ``drive[name]``
+# always returns float64, so every method computes in double precision.  A drive loaded as
+# it is keeps every column exactly as read (float64).
 SINGLE_PRECISION = frozenset(
     ("ax", "ay", "az", "wx", "wy", "wz", "v_fl", "v_fr", "v_rl", "v_rr", "v_can", "steer",
-     "gnss_ve", "gnss_vn", "gnss_vu", "gnss_pos_std", "gnss_vel_std",
-     "ref_beta", "ref_roll", "ref_pitch", "ref_bank", "ref_vx", "ref_vy", "ref_r", "ref_ay")
+     "gnss_ve", "gnss_vn", "gnss_vu", "gnss_pos_std", "gnss_vel_std")
 )  # fmt: skip
 REFERENCE_PREFIX = "ref_"  # truth columns: for evaluation, never read by a method
 WHEEL_SPEEDS = ("v_fl", "v_fr", "v_rl", "v_rr")
@@ -93,8 +91,9 @@ class Drive:
     """Validated columns of one drive as numpy arrays on the time base ``t`` (s).
 
     ``data`` holds every column but ``t``: the contract's (float, NaN where a slower sensor has
-    no sample; the channels of :data:`SINGLE_PRECISION` stored as float32, read back as float64
-    through ``drive[name]``) and any of the user's own, carried through untouched.  ``meta`` holds the
+    no sample; float32 for the channels of :data:`SINGLE_PRECISION` in a :meth:`compact`
+    drive, read back as float64 through ``drive[name]``) and any of the user's own, carried
+    through untouched.  ``meta`` holds the
     side-car metadata (``origin``, ``source``, notes).  ``path`` names the file for messages.
     """
 
@@ -148,6 +147,15 @@ class Drive:
         data = {k: v for k, v in self.data.items() if not k.startswith(REFERENCE_PREFIX)}
         return Drive(self.t, data, self.meta, self.path)
 
+    def compact(self) -> Drive:
+        """The drive as the methods need it, in about 40 % of the memory: no ``ref_*`` truth
+        columns, the sensor channels of :data:`SINGLE_PRECISION` as float32 (``t``, positions
+        and the user's columns shared, not copied).  Methods read float64 (``drive[name]``), so
+        their results change by the float32 rounding of their inputs only (relative 6e-8).
+        For estimating on long drives; evaluate against the full drive."""
+        data = {k: _stored(k, v) for k, v in self.without_reference().data.items()}
+        return Drive(self.t, data, self.meta, self.path)
+
     def to_frame(self) -> pd.DataFrame:
         """The drive as a table, every float column in double precision (as files hold it)."""
         return pd.DataFrame({"t": self.t, **{k: _double(v) for k, v in self.data.items()}})
@@ -165,8 +173,9 @@ def _double(values: Any) -> np.ndarray:
 
 
 def _stored(name: str, values: np.ndarray) -> np.ndarray:
-    """A validated contract column as the drive keeps it (:data:`SINGLE_PRECISION`)."""
-    return values.astype(np.float32) if name in SINGLE_PRECISION else values
+    """A column as a compact drive keeps it (:data:`SINGLE_PRECISION`)."""
+    arr = np.asarray(values)
+    return arr.astype(np.float32) if name in SINGLE_PRECISION and arr.dtype.kind == "f" else arr
 
 
 # ------------------------------------------------------------------------------------------
@@ -194,8 +203,7 @@ def _check_names(names: list[str], path: str) -> None:
 
 
 def validate_frame(frame: pd.DataFrame, path: str) -> dict[str, np.ndarray]:
-    """Apply contract section 5 to a table; return its columns as arrays (the contract's
-    sensor channels as float32, :data:`SINGLE_PRECISION`, once checked in float64).
+    """Apply contract section 5 to a table; return its columns as arrays.
 
     Raises :class:`InputError` on the first violated rule, naming file, column, row and what
     was expected.
@@ -282,8 +290,6 @@ def validate_frame(frame: pd.DataFrame, path: str) -> dict[str, np.ndarray]:
                 column=name,
                 row=_first_row(np.nan_to_num(col) < 0),
             )
-    for name in SINGLE_PRECISION.intersection(out):
-        out[name] = _stored(name, out[name])
     out["t"] = t
     return out
 
@@ -367,9 +373,11 @@ def _read_csv(p: Path, src: str) -> pd.DataFrame:
     return frame
 
 
-def _read_parquet(p: Path, src: str, meta: dict[str, Any]) -> pd.DataFrame:
-    _check_names([str(n) for n in pq.read_schema(p).names], src)
-    table = pq.ParquetFile(p).read()
+def _read_parquet(p: Path, src: str, meta: dict[str, Any], reference: bool = True) -> pd.DataFrame:
+    names = [str(n) for n in pq.read_schema(p).names]
+    _check_names(names, src)
+    keep = None if reference else [n for n in names if not n.startswith(REFERENCE_PREFIX)]
+    table = pq.ParquetFile(p).read(columns=keep)
     kv = table.schema.metadata or {}
     if b"sideslip" in kv:
         meta.update(json.loads(kv[b"sideslip"]))
@@ -378,11 +386,12 @@ def _read_parquet(p: Path, src: str, meta: dict[str, Any]) -> pd.DataFrame:
     return frame
 
 
-def read_table(path: str | Path) -> tuple[pd.DataFrame, dict[str, Any]]:
+def read_table(path: str | Path, reference: bool = True) -> tuple[pd.DataFrame, dict[str, Any]]:
     """Read a CSV or Parquet table and its metadata; unreadable files raise InputError.
 
     Columns named twice and cells too long to be values (:data:`MAX_CELL_CHARS`) are errors
-    naming the column (and row).
+    naming the column (and row).  ``reference=False`` skips a Parquet file's ``ref_*``
+    columns (a CSV is read whole).
     """
     p = Path(path)
     src = str(path)
@@ -393,7 +402,7 @@ def read_table(path: str | Path) -> tuple[pd.DataFrame, dict[str, Any]]:
         raise InputError(src, "cannot read: no such file")
     meta: dict[str, Any] = {}
     try:
-        frame = _read_csv(p, src) if suffix == ".csv" else _read_parquet(p, src, meta)
+        frame = _read_csv(p, src) if suffix == ".csv" else _read_parquet(p, src, meta, reference)
     except (OSError, ValueError, pa.ArrowException, json.JSONDecodeError, UnicodeDecodeError) as exc:
         first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
         raise InputError(src, f"cannot read as {suffix[1:]}: {first[:200]}") from None
@@ -409,13 +418,19 @@ def read_table(path: str | Path) -> tuple[pd.DataFrame, dict[str, Any]]:
     return frame, meta
 
 
-def load_drive(path: str | Path) -> Drive:
-    """Load and validate a drive (CSV or Parquet by extension); geodetic columns -> ENU."""
-    frame, meta = read_table(path)
+def load_drive(path: str | Path, compact: bool = False) -> Drive:
+    """Load and validate a drive (CSV or Parquet by extension); geodetic columns -> ENU.
+
+    ``compact``: return :meth:`Drive.compact` (what the methods need: no ``ref_*`` columns,
+    sensor channels float32); a Parquet file's reference columns are then not even read.
+    """
+    frame, meta = read_table(path, reference=not compact)
     cols = validate_frame(frame, str(path))
+    del frame  # memory: the validated arrays are all that is kept
     _geodetic_to_enu(cols, meta, str(path))
     t = cols.pop("t")
-    return Drive(t=t, data=cols, meta=meta, path=str(path))
+    drive = Drive(t=t, data=cols, meta=meta, path=str(path))
+    return drive.compact() if compact else drive
 
 
 def save_table(frame: pd.DataFrame, path: str | Path, meta: Mapping[str, Any] | None = None) -> None:

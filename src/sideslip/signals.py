@@ -8,6 +8,9 @@ measurement (age 0) from a held one.
 
 from __future__ import annotations
 
+import math
+
+import numba
 import numpy as np
 from numpy.typing import NDArray
 
@@ -60,23 +63,38 @@ def interpolate(values: FloatArray, t: FloatArray, max_gap_s: float = np.inf) ->
     return out
 
 
+def _wheel_names(drive: Drive, prefer: str) -> list[str]:
+    names = ("v_rl", "v_rr") if prefer == "rear" else WHEEL_SPEEDS
+    present = [n for n in names if n in drive]
+    if len(present) < (2 if prefer == "rear" else 1):
+        present = [n for n in WHEEL_SPEEDS if n in drive]
+    return present
+
+
 def wheel_speed(drive: Drive, prefer: str = "rear") -> FloatArray | None:
     """Vehicle speed (m/s) from wheel speeds: mean of the rear (undriven on FWD cars) or all.
 
     ``prefer='rear'`` uses the rear pair when both exist, else every wheel present.  Rows with no
-    wheel sample stay NaN.  Returns None when the drive has no wheel speed.
+    wheel sample stay NaN.  Returns None when the drive has no wheel speed.  Summed one wheel
+    at a time (a few bytes per row of temporaries, not a stack of every wheel).
     """
-    names = ("v_rl", "v_rr") if prefer == "rear" else WHEEL_SPEEDS
-    cols = [drive[n] for n in names if n in drive]
-    if len(cols) < (2 if prefer == "rear" else 1):
-        cols = [drive[n] for n in WHEEL_SPEEDS if n in drive]
-    if not cols:
+    names = _wheel_names(drive, prefer)
+    if not names:
         return None
-    stack = np.vstack(cols)
-    with np.errstate(invalid="ignore"):
-        count = np.isfinite(stack).sum(axis=0)
-        total = np.nansum(stack, axis=0)
-    return np.where(count > 0, total / np.maximum(count, 1), np.nan)
+    count = np.zeros(len(drive))
+    total = np.zeros(len(drive))
+    for k, name in enumerate(names):
+        col = drive[name]
+        ok = np.isfinite(col)
+        count += ok
+        if k == 0:
+            total = np.where(ok, col, 0.0)
+        else:
+            total += np.where(ok, col, 0.0)
+        del col, ok
+    np.divide(total, np.maximum(count, 1.0), out=total)
+    total[count == 0] = np.nan
+    return total
 
 
 def vehicle_speed(drive: Drive) -> FloatArray:
@@ -94,7 +112,7 @@ def vehicle_speed(drive: Drive) -> FloatArray:
 
 def speed_source(drive: Drive) -> str:
     """Which column(s) :func:`vehicle_speed` reads: 'wheels', 'v_can', 'gnss' or 'none'."""
-    if wheel_speed(drive) is not None:
+    if _wheel_names(drive, "rear"):
         return "wheels"
     if "v_can" in drive:
         return "v_can"
@@ -184,15 +202,34 @@ def white_noise_sigma_100hz(t: FloatArray, x: FloatArray, max_dt: float = 0.05) 
 
 
 def causal_mean(t: FloatArray, x: FloatArray, window_s: float) -> FloatArray:
-    """Causal moving mean over ``window_s`` of the finite samples (0 where none yet)."""
-    v = np.where(np.isfinite(x), x, 0.0)
-    c = np.isfinite(x).astype(float)
-    cv = np.concatenate(([0.0], np.cumsum(v)))
-    cc = np.concatenate(([0.0], np.cumsum(c)))
-    j = np.searchsorted(t, t - window_s, side="right")
-    i = np.arange(t.size) + 1
-    cnt = cc[i] - cc[j]
-    return np.asarray(np.where(cnt > 0, (cv[i] - cv[j]) / np.maximum(cnt, 1.0), 0.0), dtype=float)
+    """Causal moving mean over ``window_s`` of the finite samples (0 where none yet).
+
+    The mean over the rows j with t_j > t_k - window_s, j <= k, from prefix sums (one compiled
+    pass, 24 B/row of temporaries)."""
+    tt = np.ascontiguousarray(t, dtype=float)
+    return np.asarray(_causal_mean(tt, np.ascontiguousarray(x, dtype=float), tt - window_s))
+
+
+@numba.njit(cache=True)
+def _causal_mean(t: FloatArray, x: FloatArray, start: FloatArray
+                 ) -> FloatArray:  # pragma: no cover - compiled
+    n = t.size
+    cv = np.empty(n + 1)
+    cc = np.empty(n + 1)
+    cv[0] = 0.0
+    cc[0] = 0.0
+    for i in range(n):
+        ok = math.isfinite(x[i])
+        cv[i + 1] = cv[i] + (x[i] if ok else 0.0)
+        cc[i + 1] = cc[i] + (1.0 if ok else 0.0)
+    out = np.empty(n)
+    j = 0
+    for i in range(n):
+        while j < n and t[j] <= start[i]:  # searchsorted(t, t - window, side="right")
+            j += 1
+        cnt = cc[i + 1] - cc[j]
+        out[i] = (cv[i + 1] - cv[j]) / max(cnt, 1.0) if cnt > 0 else 0.0
+    return out
 
 
 GRAVITY_M_S2 = 9.80665

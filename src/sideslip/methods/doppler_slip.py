@@ -542,7 +542,10 @@ def run_doppler_slip(drive: Drive, vehicle: Vehicle, use_roll: bool = True,
         **fit.params(),
     )
     for key, value in series.items():
-        series[key] = np.nan_to_num(np.asarray(value, dtype=float), nan=0.0, posinf=0.0, neginf=0.0)
+        arr = np.asarray(value, dtype=float)
+        if not np.isfinite(arr).all():  # copy only the series that need it (memory)
+            arr = np.nan_to_num(arr, nan=0.0, posinf=0.0, neginf=0.0)
+        series[key] = arr
     innovations = {"doppler_sideslip": check.innovation, "doppler_sideslip_nis": check.nis}
     return Estimate("doppler_slip" if use_roll else "doppler_slip_noroll", t, series, params,
                     innovations)

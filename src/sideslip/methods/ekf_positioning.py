@@ -380,7 +380,7 @@ def _estimate(
 ) -> Estimate:
     x, var = res.x, res.var
     t = drive.t
-    sd = np.sqrt(np.maximum(var, 0.0))
+    sd = np.sqrt(np.maximum(var, 0.0, out=var), out=var)  # in place: res is this call's own
     x_last, sd_last = res.x_final, np.sqrt(np.maximum(res.var_final, 0.0))
     bg = ROW_COLUMN[BG]
     inflation = np.ones(t.size)
@@ -392,6 +392,8 @@ def _estimate(
     if tu.consistency_window_s > 0:
         cons = binned_nis_consistency(t, nis_sum, dof, tu.consistency_window_s)
         inflation, health, health_params = cons.inflation, cons.health, cons.summary(t)
+        del cons  # memory: its other per-row series are not needed
+    del nis_sum, dof
     k = np.sqrt(inflation)
     # road bank: the car crabs by k_slip g sin(bank) on a bank while the driver holds
     # delta = K_us g sin(bank) (read by eq 2.3 as lr/L delta of sideslip); the bank from the

@@ -317,11 +317,16 @@ def build_graph(
     delta = inputs.delta[sl]
     low = inputs.low_speed[sl]
     A, B, _, _ = continuous_arrays(vehicle, inputs.v_dynamics[sl], v_min=settings.speed_gate)
-    _, _, C, D = continuous_arrays(vehicle, inputs.v_measurement[sl], v_min=settings.speed_gate)
+    b_steer = B[:, :, 0].copy()  # memory: the steering column is all the graph reads of B
+    del B, _
 
     dt = np.diff(t)
     F = np.eye(2)[None, :, :] + dt[:, None, None] * A[:-1]
-    g = dt[:, None] * B[:-1, :, 0] * delta[:-1, None]
+    del A
+    g = dt[:, None] * b_steer[:-1] * delta[:-1, None]
+    del b_steer
+    _, _, C, D = continuous_arrays(vehicle, inputs.v_measurement[sl], v_min=settings.speed_gate)
+    del _
     scale = np.sqrt(dt / settings.reference_dt)
     sigma_q = np.empty((n - 1, 2))
     sigma_q[:, 0] = settings.sigma("model_beta") * scale
@@ -423,10 +428,24 @@ def _graph(prep: Prepared, vehicle: Vehicle) -> SideslipGraph:
 def solve_batch(graph: SideslipGraph) -> tuple[FloatArray, FloatArray, FloatArray]:
     """Batch solution: ``(x, var, cov)``: (N, 2) means and marginal variances and the (N,)
     beta-r covariance of each row; one banded Cholesky + selected inverse."""
+    return _solve_system(_assembled(graph))
+
+
+def _assembled(graph: SideslipGraph) -> list[FloatArray]:
+    """The banded normal equations ``[ab, rhs]`` of the graph (a list: see _solve_system)."""
     lam0, eta0 = graph.prior_information
-    ab, rhs = assemble_chain(graph.F, graph.g, graph.wq, graph.Hu, graph.zu, graph.wu, lam0, eta0)
+    return list(assemble_chain(graph.F, graph.g, graph.wq, graph.Hu, graph.zu, graph.wu, lam0, eta0))
+
+
+def _solve_system(system: list[FloatArray]) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """:func:`solve_batch` from ``[ab, rhs]``, emptying the list so each array is freed as soon
+    as the next step no longer needs it (memory: 80 B/row of normal equations)."""
+    ab, rhs = system
+    system.clear()
     x, cb = solve_chain(ab, rhs)
+    del ab, rhs
     sb = selected_inverse(cb)
+    del cb
     return x.reshape(-1, 2), sb[0].reshape(-1, 2), sb[1].reshape(-1, 2)[:, 0].copy()
 
 
@@ -508,7 +527,7 @@ def _estimate(
     if innovations is not None:
         nu, S = innovations
         check = block_consistency(drive.t, nu[:, :2], S[:, :2], causal)
-        var = var * check.inflation[:, None]
+        var *= check.inflation[:, None]  # var is this function's own copy (above)
         out["health"] = check.health
         params["health"] = {**check.summary(drive.t), "test": (
             f"sums of the graph's Kalman innovations (gyro, a_y) over {BLOCK_S:g} s blocks, "
@@ -522,9 +541,10 @@ def _estimate(
         alpha = np.maximum(np.abs(alpha_f), np.abs(alpha_r))
         var[:, 0] += (settings.stiffness_rel_sigma * alpha) ** 2
         params["stiffness_rel_sigma"] = settings.stiffness_rel_sigma
-    std = np.sqrt(var)
-    out["beta_std"] = std[:, 0]
-    out["r_std"] = std[:, 1]
+    std = np.sqrt(var, out=var)
+    out["beta_std"] = std[:, 0].copy()
+    out["r_std"] = std[:, 1].copy()
+    del std, var
     return Estimate(name, drive.t, out, params, inn)
 
 
@@ -551,8 +571,12 @@ def fg_batch(
     """Batch factor-graph smoother of the whole drive (module docstring), O(N)."""
     prep = prepare(drive, vehicle, settings)
     graph = _graph(prep, vehicle)
-    x, var, cov = solve_batch(graph)
-    return _estimate("fg_batch", drive, prep, _filter_innovations(graph, settings), x, var, cov,
+    prep = replace(prep, graph=None)  # memory: the graph goes once assembled
+    inn = _filter_innovations(graph, settings)
+    system = _assembled(graph)
+    del graph
+    x, var, cov = _solve_system(system)
+    return _estimate("fg_batch", drive, prep, inn, x, var, cov,
                      settings, False, {"solver": "banded Cholesky"}, vehicle)  # fmt: skip
 
 
@@ -592,7 +616,10 @@ def kf_linear(
 ) -> Estimate:
     """Linear Kalman filter with F = I + dt A, Q = diag(model sigmas^2), R = factor sigmas^2."""
     prep = prepare(drive, vehicle, settings)
-    x, var, cov, nu, S = solve_kalman(_graph(prep, vehicle))
+    graph = _graph(prep, vehicle)
+    prep = replace(prep, graph=None)  # memory: the graph goes once solved
+    x, var, cov, nu, S = solve_kalman(graph)
+    del graph
     inn = (nu, S) if settings.consistency else None
     return _estimate("kf_linear", drive, prep, inn, x, var, cov, settings, True,
                      {"filter": "Joseph form"}, vehicle)  # fmt: skip
