@@ -413,6 +413,7 @@ def run_doppler_slip(drive: Drive, vehicle: Vehicle, use_roll: bool = True,
             roll = roll_from_lateral(ay_s, r_s, v_h, scan.ay_bias, transient)
             roll_raw = roll_from_lateral(ay_s, r_s, v_h, 0.0, transient)
             rate_h = horizontal_yaw_rate(wz, 0.0, roll, pitch)
+            del stiff, r_stiff, rate_c, transient  # memory: per-row arrays of this pass
         fit = fit_heading(t, rate_h, samples, select, offset_rows, still_rows, wz)
         r_corr = fit.gyro_scale * wz - fit.gyro_bias * fit.gyro_scale
         r_s = moving_average(r_corr, width)
@@ -430,6 +431,7 @@ def run_doppler_slip(drive: Drive, vehicle: Vehicle, use_roll: bool = True,
 
     if fit is None:  # pragma: no cover - N_PASSES >= 1
         raise RuntimeError("heading fit did not run")
+    del rate_h, r_est, gy_raw, ay_s, beta_r_model, still  # memory: the passes' per-row arrays
     r_corr = fit.gyro_scale * wz - fit.gyro_bias * fit.gyro_scale
     r_s = moving_average(r_corr, width)
     gy = r_s * v_h + (G * np.sin(roll) if use_roll else 0.0)

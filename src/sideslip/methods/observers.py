@@ -263,7 +263,7 @@ def _fresh(drive: Drive, *names: str) -> NDArray[np.bool_]:
 
 # Rows per chunk of the per-row 2x2 matrices (A, B, K, Phi, Gamma: 32 B/row each): the
 # observers build them a chunk at a time, so their memory does not grow with them.
-CHUNK_ROWS = 1 << 16
+CHUNK_ROWS = 1 << 14
 
 # (Phi, Gam, w, A, bu) of one chunk of rows
 ChunkMatrices = tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]
