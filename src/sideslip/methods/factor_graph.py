@@ -431,6 +431,11 @@ def solve_batch(graph: SideslipGraph) -> tuple[FloatArray, FloatArray, FloatArra
     return _solve_system(_assembled(graph))
 
 
+def _factor_parts(graph: SideslipGraph) -> list[FloatArray]:
+    """``[F, g, wq, Hu, zu, wu]``: what the filter and the normal equations read of a graph."""
+    return [graph.F, graph.g, graph.wq, graph.Hu, graph.zu, graph.wu]
+
+
 def _assembled(graph: SideslipGraph) -> list[FloatArray]:
     """The banded normal equations ``[ab, rhs]`` of the graph (a list: see _solve_system)."""
     lam0, eta0 = graph.prior_information
@@ -572,10 +577,15 @@ def fg_batch(
     prep = prepare(drive, vehicle, settings)
     graph = _graph(prep, vehicle)
     prep = replace(prep, graph=None)  # memory: the graph goes once assembled
-    inn = _filter_innovations(graph, settings)
-    parts = [graph.F, graph.g, graph.wq, graph.Hu, graph.zu, graph.wu, *graph.prior_information]
-    del graph  # memory: its sigmas go before the normal equations are built, the rest after
-    system = list(assemble_chain(*parts))
+    parts = _factor_parts(graph)
+    x0, P0, (lam0, eta0) = graph.x0, np.diag(graph.sigma0**2), graph.prior_information
+    del graph  # memory: its sigmas go before the filter and the normal equations run
+    inn = None
+    if settings.consistency:  # the innovations of the graph's Kalman filter (_filter_innovations)
+        _, _, _, nu, S = chain_kalman(*parts, x0, P0)
+        inn = nu[:, :2].copy(), S[:, :2].copy()
+        del nu, S
+    system = list(assemble_chain(*parts, lam0, eta0))
     del parts
     x, var, cov = _solve_system(system)
     return _estimate("fg_batch", drive, prep, inn, x, var, cov,
@@ -619,9 +629,11 @@ def kf_linear(
     """Linear Kalman filter with F = I + dt A, Q = diag(model sigmas^2), R = factor sigmas^2."""
     prep = prepare(drive, vehicle, settings)
     graph = _graph(prep, vehicle)
-    prep = replace(prep, graph=None)  # memory: the graph goes once solved
-    x, var, cov, nu, S = solve_kalman(graph)
-    del graph
+    prep = replace(prep, graph=None)  # memory: only the filter's inputs are kept
+    parts, x0, P0 = _factor_parts(graph), graph.x0, np.diag(graph.sigma0**2)
+    del graph  # memory: its sigmas go before the filter runs
+    x, var, cov, nu, S = chain_kalman(*parts, x0, P0)
+    del parts
     inn = (nu, S) if settings.consistency else None
     return _estimate("kf_linear", drive, prep, inn, x, var, cov, settings, True,
                      {"filter": "Joseph form"}, vehicle)  # fmt: skip
