@@ -26,9 +26,8 @@ scan of each wheel-speed event.
 
 from __future__ import annotations
 
-from collections.abc import Iterable
-
 import math
+from collections.abc import Iterable
 
 import numba
 import numpy as np

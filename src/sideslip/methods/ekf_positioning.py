@@ -241,14 +241,15 @@ def _loop_tuning(tu: EkfTuning) -> LoopTuning:
 class EkfResult:
     """Filter output on the drive's time base (N rows).
 
-    ``x`` (N, 7) the states of :data:`~sideslip.methods.ekf_filter.ROW_STATES` (e, n, yaw, v,
-    r, K_us, gyro bias: columns 0-4 are the state indices E ... R, ``ROW_COLUMN[s]`` the column
-    of state s) after the updates of each row, ``var`` (N, 7) their variances; ``x_final`` and ``var_final``
-    (14,) every state (``STATE_NAMES``) and its variance after the last row; ``cov_en`` (N,) the e-n covariance
-    (for the error ellipse), ``beta`` and ``beta_var`` the kinematic sideslip (eq 2.3) and
-    its variance, ``gnss_flag`` (N,) int8 GNSS_NONE/USED/REJECTED/FORCED, ``align`` the
-    initial-alignment summary, ``nis_steer``/``nis_gyro``/``nis_gnss`` the NIS of each row's
-    steering (1 dof), gyro (1 dof) and GNSS (2 dof, before gating) updates, NaN where none.
+    ``x`` (N, 7) the states of :data:`~sideslip.methods.ekf_filter.ROW_STATES` (e, n, yaw, v, r,
+    K_us, gyro bias: columns 0-4 are the state indices E ... R, ``ROW_COLUMN[s]`` the column of
+    state s) after the updates of each row, ``var`` (N, 7) their variances; ``x_final`` and
+    ``var_final`` (14,) every state (``STATE_NAMES``) and its variance after the last row;
+    ``cov_en`` (N,) the e-n covariance (for the error ellipse), ``beta`` and ``beta_var`` the
+    kinematic sideslip (eq 2.3) and its variance, ``gnss_flag`` (N,) int8
+    GNSS_NONE/USED/REJECTED/FORCED, ``align`` the initial-alignment summary,
+    ``nis_steer``/``nis_gyro``/``nis_gnss`` the NIS of each row's steering (1 dof), gyro (1 dof)
+    and GNSS (2 dof, before gating) updates, NaN where none.
     """
 
     x: FloatArray

@@ -436,6 +436,16 @@ def _factor_parts(graph: SideslipGraph) -> list[FloatArray]:
     return [graph.F, graph.g, graph.wq, graph.Hu, graph.zu, graph.wu]
 
 
+def _kalman(p: list[FloatArray], x0: FloatArray, P0: FloatArray) -> tuple[FloatArray, ...]:
+    """:func:`~sideslip.methods.fg_tuning.chain_kalman` on :func:`_factor_parts`."""
+    return tuple(chain_kalman(p[0], p[1], p[2], p[3], p[4], p[5], x0, P0))
+
+
+def _assemble(p: list[FloatArray], lam0: FloatArray, eta0: FloatArray) -> tuple[FloatArray, ...]:
+    """:func:`~sideslip.filters.banded.assemble_chain` on :func:`_factor_parts`."""
+    return tuple(assemble_chain(p[0], p[1], p[2], p[3], p[4], p[5], lam0, eta0))
+
+
 def _assembled(graph: SideslipGraph) -> list[FloatArray]:
     """The banded normal equations ``[ab, rhs]`` of the graph (a list: see _solve_system)."""
     lam0, eta0 = graph.prior_information
@@ -582,10 +592,10 @@ def fg_batch(
     del graph  # memory: its sigmas go before the filter and the normal equations run
     inn = None
     if settings.consistency:  # the innovations of the graph's Kalman filter (_filter_innovations)
-        _, _, _, nu, S = chain_kalman(*parts, x0, P0)
+        _, _, _, nu, S = _kalman(parts, x0, P0)
         inn = nu[:, :2].copy(), S[:, :2].copy()
         del nu, S
-    system = list(assemble_chain(*parts, lam0, eta0))
+    system = list(_assemble(parts, lam0, eta0))
     del parts
     x, var, cov = _solve_system(system)
     return _estimate("fg_batch", drive, prep, inn, x, var, cov,
@@ -632,7 +642,7 @@ def kf_linear(
     prep = replace(prep, graph=None)  # memory: only the filter's inputs are kept
     parts, x0, P0 = _factor_parts(graph), graph.x0, np.diag(graph.sigma0**2)
     del graph  # memory: its sigmas go before the filter runs
-    x, var, cov, nu, S = chain_kalman(*parts, x0, P0)
+    x, var, cov, nu, S = _kalman(parts, x0, P0)
     del parts
     inn = (nu, S) if settings.consistency else None
     return _estimate("kf_linear", drive, prep, inn, x, var, cov, settings, True,
