@@ -24,7 +24,7 @@ from tests.conftest import sim_drive
 # methods took 400-560 B/row.
 BYTES_PER_ROW_BUDGET = 340.0
 HEAVY = ("obs_modified", "obs_modified_nocomp", "obs_bicycle", "ekf_wss_sas", "ekf_wss_sas_imu",
-         "doppler_slip", "doppler_slip_noroll", "kf_linear", "fg_batch")  # fmt: skip
+         "doppler_slip", "doppler_slip_noroll", "kf_linear", "fg_batch", "fg_lag")  # fmt: skip
 ROWS = (60_000, 180_000)
 
 

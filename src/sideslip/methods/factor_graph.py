@@ -617,8 +617,18 @@ def fg_lag(
     later (an on-line delay of window x dt), oldest state marginalised into the next prior.
     The "auto" sigmas are identified off-line from the whole drive (module fg_tuning)."""
     prep = prepare(drive, vehicle, settings)
+    inn = None
+    if settings.consistency:  # the innovations of the graph's Kalman filter (_filter_innovations)
+        graph = _graph(prep, vehicle)
+        parts, x0, P0 = _factor_parts(graph), graph.x0, np.diag(graph.sigma0**2)
+        del graph  # memory: its sigmas go before the filter runs
+        prep = replace(prep, graph=None)
+        _, _, _, nu, S = _kalman(parts, x0, P0)
+        del parts
+        inn = nu[:, :2].copy(), S[:, :2].copy()
+        del nu, S
+    prep = replace(prep, graph=None)  # memory: the lag solver builds its own chunks
     x, var, cov = solve_lag(prep.inputs, vehicle, prep.settings)
-    inn = _filter_innovations(_graph(prep, vehicle), settings) if settings.consistency else None
     return _estimate(
         "fg_lag", drive, prep, inn, x, var, cov, settings, True,
         {"window": int(settings.window), "output_delay_samples": int(settings.window)}, vehicle,
