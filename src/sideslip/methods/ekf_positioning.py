@@ -381,6 +381,8 @@ def _estimate(
 ) -> Estimate:
     x, var = res.x, res.var
     t = drive.t
+    # the gyro's identified noise, for params: first, while few per-row arrays exist (memory)
+    g_sigma, g_source = _gyro_sigma(drive, tu) if use_gyro else (math.nan, "")
     sd = np.sqrt(np.maximum(var, 0.0, out=var), out=var)  # in place: res is this call's own
     x_last, sd_last = res.x_final, np.sqrt(np.maximum(res.var_final, 0.0))
     bg = ROW_COLUMN[BG]
@@ -452,7 +454,6 @@ def _estimate(
         "settings": settings_dict(tu),
     }
     if use_gyro:
-        g_sigma, g_source = _gyro_sigma(drive, tu)
         params["gyro_bias_rad_s"] = float(x_last[BG])
         params["gyro_bias_rad_s_sigma"] = float(sd_last[BG])
         params["noise"] = {"gyro_sigma_rad_s": g_sigma, "gyro_sigma_source": g_source,
