@@ -186,19 +186,48 @@ def white_noise_sigma_100hz(t: FloatArray, x: FloatArray, max_dt: float = 0.05) 
     sqrt(100 Hz / rate).  None with fewer than 200 usable triples or slower sampling than
     ``max_dt``.
     """
-    rows = np.flatnonzero(np.isfinite(x))
-    if rows.size < 203:
+    n_ok = int(np.count_nonzero(np.isfinite(x)))
+    if n_ok < 203:
         return None
-    ts, xs = t[rows], x[rows]
-    dt = np.diff(ts)
-    ok = (dt[1:] <= max_dt) & (dt[:-1] <= max_dt) & (np.abs(dt[1:] - dt[:-1]) < 0.1 * dt[1:])
-    if ok.sum() < 200:
+    d2, steps = _second_differences(np.asarray(t, dtype=float), np.asarray(x, dtype=float), max_dt)
+    if d2.size < 200:
         return None
-    d2 = (xs[2:] - 2.0 * xs[1:-1] + xs[:-2])[ok]
-    step = float(np.median(dt[1:][ok]))
+    step = float(np.median(steps))
+    del steps
     mad = float(np.median(np.abs(d2 - np.median(d2))))
     sigma = 1.4826 * mad / np.sqrt(6.0)
     return float(sigma * np.sqrt(step / 0.01))
+
+
+@numba.njit(cache=True)
+def _second_differences(t: FloatArray, x: FloatArray, max_dt: float
+                        ) -> tuple[FloatArray, FloatArray]:  # pragma: no cover - compiled
+    """x_k+1 - 2 x_k + x_k-1 over consecutive finite samples, and the step t_k+1 - t_k, where
+    both steps are at most ``max_dt`` and within 10 % of each other (one pass, no copies)."""
+    n = x.size
+    n_ok = 0
+    for i in range(n):
+        if math.isfinite(x[i]):
+            n_ok += 1
+    d2 = np.empty(max(n_ok - 2, 0))
+    steps = np.empty(max(n_ok - 2, 0))
+    m = 0
+    seen = 0
+    t1 = x1 = t2 = x2 = 0.0  # the previous finite sample (1) and the one before (2)
+    for i in range(n):
+        if not math.isfinite(x[i]):
+            continue
+        if seen >= 2:
+            dt_new = t[i] - t1
+            dt_old = t1 - t2
+            if dt_new <= max_dt and dt_old <= max_dt and abs(dt_new - dt_old) < 0.1 * dt_new:
+                d2[m] = x[i] - 2.0 * x1 + x2
+                steps[m] = dt_new
+                m += 1
+        t2, x2 = t1, x1
+        t1, x1 = t[i], x[i]
+        seen += 1
+    return d2[:m], steps[:m]
 
 
 def causal_mean(t: FloatArray, x: FloatArray, window_s: float) -> FloatArray:
