@@ -85,7 +85,10 @@ from numpy.typing import NDArray
 
 from sideslip.drive import Drive
 from sideslip.estimate import Estimate
-from sideslip.filters.banded import assemble_chain, fixed_lag_chain, selected_inverse, solve_chain
+from sideslip.filters.banded import fixed_lag_chain
+from sideslip.methods import fg_solve
+from sideslip.methods.fg_solve import solve_batch as solve_batch
+from sideslip.methods.fg_solve import solve_kalman as solve_kalman
 from sideslip.methods.fg_tuning import (
     BLOCK_S,
     PRESETS,
@@ -93,7 +96,6 @@ from sideslip.methods.fg_tuning import (
     WINDOW_S,
     Tuning,
     block_consistency,
-    chain_kalman,
     choose_sigmas,
 )
 from sideslip.methods.registry import SPEED, register
@@ -425,45 +427,6 @@ def _graph(prep: Prepared, vehicle: Vehicle) -> SideslipGraph:
     return prep.graph if prep.graph is not None else build_graph(prep.inputs, vehicle, prep.settings)
 
 
-def solve_batch(graph: SideslipGraph) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """Batch solution: ``(x, var, cov)``: (N, 2) means and marginal variances and the (N,)
-    beta-r covariance of each row; one banded Cholesky + selected inverse."""
-    return _solve_system(_assembled(graph))
-
-
-def _factor_parts(graph: SideslipGraph) -> list[FloatArray]:
-    """``[F, g, wq, Hu, zu, wu]``: what the filter and the normal equations read of a graph."""
-    return [graph.F, graph.g, graph.wq, graph.Hu, graph.zu, graph.wu]
-
-
-def _kalman(p: list[FloatArray], x0: FloatArray, P0: FloatArray) -> tuple[FloatArray, ...]:
-    """:func:`~sideslip.methods.fg_tuning.chain_kalman` on :func:`_factor_parts`."""
-    return tuple(chain_kalman(p[0], p[1], p[2], p[3], p[4], p[5], x0, P0))
-
-
-def _assemble(p: list[FloatArray], lam0: FloatArray, eta0: FloatArray) -> tuple[FloatArray, ...]:
-    """:func:`~sideslip.filters.banded.assemble_chain` on :func:`_factor_parts`."""
-    return tuple(assemble_chain(p[0], p[1], p[2], p[3], p[4], p[5], lam0, eta0))
-
-
-def _assembled(graph: SideslipGraph) -> list[FloatArray]:
-    """The banded normal equations ``[ab, rhs]`` of the graph (a list: see _solve_system)."""
-    lam0, eta0 = graph.prior_information
-    return list(assemble_chain(graph.F, graph.g, graph.wq, graph.Hu, graph.zu, graph.wu, lam0, eta0))
-
-
-def _solve_system(system: list[FloatArray]) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """:func:`solve_batch` from ``[ab, rhs]``, emptying the list so each array is freed as soon
-    as the next step no longer needs it (memory: 80 B/row of normal equations)."""
-    ab, rhs = system
-    system.clear()
-    x, cb = solve_chain(ab, rhs)
-    del ab, rhs
-    sb = selected_inverse(cb)
-    del cb
-    return x.reshape(-1, 2), sb[0].reshape(-1, 2), sb[1].reshape(-1, 2)[:, 0].copy()
-
-
 def solve_lag(
     inputs: GraphInputs,
     vehicle: Vehicle,
@@ -497,15 +460,6 @@ def solve_lag(
         var[a:b] = vs
         cov[a:b] = cs[:, 0]
     return x, var, cov
-
-
-def solve_kalman(graph: SideslipGraph) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
-    """Kalman filter on the same factors: F, g, Q = diag(sigma_q^2), R = sigma_u^2, P0;
-    ``(x, var, cov, innovation, S)`` (:func:`sideslip.methods.fg_tuning.chain_kalman`)."""
-    return chain_kalman(
-        graph.F, graph.g, graph.wq, graph.Hu, graph.zu, graph.wu, graph.x0,
-        np.diag(graph.sigma0**2),
-    )  # fmt: skip
 
 
 def _estimate(
@@ -563,15 +517,6 @@ def _estimate(
     return Estimate(name, drive.t, out, params, inn)
 
 
-def _filter_innovations(
-    graph: SideslipGraph, settings: FactorGraphSettings
-) -> tuple[FloatArray, FloatArray] | None:
-    if not settings.consistency:
-        return None
-    _, _, _, nu, S = solve_kalman(graph)
-    return nu[:, :2].copy(), S[:, :2].copy()  # memory: the gyro and a_y factors are tested
-
-
 @register(
     "fg_batch",
     columns=COLUMNS,
@@ -587,17 +532,13 @@ def fg_batch(
     prep = prepare(drive, vehicle, settings)
     graph = _graph(prep, vehicle)
     prep = replace(prep, graph=None)  # memory: the graph goes once assembled
-    parts = _factor_parts(graph)
+    parts = fg_solve.factor_parts(graph)
     x0, P0, (lam0, eta0) = graph.x0, np.diag(graph.sigma0**2), graph.prior_information
     del graph  # memory: its sigmas go before the filter and the normal equations run
-    inn = None
-    if settings.consistency:  # the innovations of the graph's Kalman filter (_filter_innovations)
-        _, _, _, nu, S = _kalman(parts, x0, P0)
-        inn = nu[:, :2].copy(), S[:, :2].copy()
-        del nu, S
-    system = list(_assemble(parts, lam0, eta0))
+    inn = fg_solve.innovations_on_parts(parts, x0, P0) if settings.consistency else None
+    system = fg_solve.assemble_parts(parts, lam0, eta0)
     del parts
-    x, var, cov = _solve_system(system)
+    x, var, cov = fg_solve.solve_system(system)
     return _estimate("fg_batch", drive, prep, inn, x, var, cov,
                      settings, False, {"solver": "banded Cholesky"}, vehicle)  # fmt: skip
 
@@ -618,15 +559,13 @@ def fg_lag(
     The "auto" sigmas are identified off-line from the whole drive (module fg_tuning)."""
     prep = prepare(drive, vehicle, settings)
     inn = None
-    if settings.consistency:  # the innovations of the graph's Kalman filter (_filter_innovations)
+    if settings.consistency:  # the graph's Kalman innovations, its sigmas freed first (memory)
         graph = _graph(prep, vehicle)
-        parts, x0, P0 = _factor_parts(graph), graph.x0, np.diag(graph.sigma0**2)
-        del graph  # memory: its sigmas go before the filter runs
+        parts, x0, P0 = fg_solve.factor_parts(graph), graph.x0, np.diag(graph.sigma0**2)
+        del graph
         prep = replace(prep, graph=None)
-        _, _, _, nu, S = _kalman(parts, x0, P0)
+        inn = fg_solve.innovations_on_parts(parts, x0, P0)
         del parts
-        inn = nu[:, :2].copy(), S[:, :2].copy()
-        del nu, S
     prep = replace(prep, graph=None)  # memory: the lag solver builds its own chunks
     x, var, cov = solve_lag(prep.inputs, vehicle, prep.settings)
     return _estimate(
@@ -650,9 +589,9 @@ def kf_linear(
     prep = prepare(drive, vehicle, settings)
     graph = _graph(prep, vehicle)
     prep = replace(prep, graph=None)  # memory: only the filter's inputs are kept
-    parts, x0, P0 = _factor_parts(graph), graph.x0, np.diag(graph.sigma0**2)
+    parts, x0, P0 = fg_solve.factor_parts(graph), graph.x0, np.diag(graph.sigma0**2)
     del graph  # memory: its sigmas go before the filter runs
-    x, var, cov, nu, S = _kalman(parts, x0, P0)
+    x, var, cov, nu, S = fg_solve.kalman_on_parts(parts, x0, P0)
     del parts
     inn = (nu, S) if settings.consistency else None
     return _estimate("kf_linear", drive, prep, inn, x, var, cov, settings, True,
