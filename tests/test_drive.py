@@ -9,7 +9,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from sideslip.drive import drive_from_columns, load_drive, meta_path, save_drive
+from sideslip.drive import SINGLE_PRECISION, drive_from_columns, load_drive, meta_path, save_drive
 from sideslip.errors import InputError
 from tests.data.make_circle_drive import circle_columns
 from tests.helpers import CIRCLE
@@ -257,3 +257,33 @@ def test_side_car_that_is_not_an_object_is_one_line(tmp_path):
     meta_path(p).write_text("[1, 2]")
     with pytest.raises(InputError, match=r"d.meta.json: expected a JSON object of metadata"):
         load_drive(p)
+
+
+def test_compact_drive_keeps_sensor_channels_in_float32_and_drops_the_reference():
+    drive = load_drive(CIRCLE)
+    small = drive.compact()
+    assert not [c for c in small.data if c.startswith("ref_")]
+    assert small.t is drive.t and small.data["gnss_e"] is drive.data["gnss_e"]  # shared
+    assert small.data["driver_note"] is drive.data["driver_note"]  # the user's own: untouched
+    # the bytes per row of a known column set: t and gnss_e/n/u stay 8 bytes, the sensor
+    # channels of SINGLE_PRECISION take 4, the user's text column an 8-byte reference
+    kept = [c for c in drive.data if not c.startswith("ref_")]
+    single = [c for c in kept if c in SINGLE_PRECISION]
+    assert {"wz", "ay", "steer", "v_rl"} <= set(single) and "gnss_e" not in single
+    expected = 8 + 4 * len(single) + 8 * (len(kept) - len(single))
+    assert small.nbytes() == expected * len(drive)
+    assert drive.nbytes() > small.nbytes() * 1.4
+    # methods still read float64, equal to the float32 rounding of the original samples
+    assert small["wz"].dtype == np.float64
+    np.testing.assert_array_equal(small["wz"], drive["wz"].astype(np.float32).astype(float))
+    np.testing.assert_allclose(small["wz"], drive["wz"], rtol=6e-8, atol=0)
+
+
+def test_compact_load_of_parquet_reads_no_reference_and_saves_double(tmp_path):
+    out = tmp_path / "d.parquet"
+    save_drive(load_drive(CIRCLE), out)
+    small = load_drive(out, compact=True)
+    assert "ref_beta" not in small.data and small.data["ay"].dtype == np.float32
+    assert small.to_frame()["ay"].dtype == np.float64  # files keep double precision
+    full = load_drive(out)  # the default load is exact: every column as stored
+    assert full.data["ay"].dtype == np.float64 and "ref_beta" in full.data

@@ -78,12 +78,14 @@ def tiled_drive(base: Drive, hours: float) -> Drive:
 
 
 def bench_drive(
-    hours: float, console: Console | None = None, cache: Path | None = None
+    hours: float, console: Console | None = None, cache: Path | None = None, reference: bool = True
 ) -> tuple[Drive, dict[str, float]]:
     """The cached benchmark drive of ``hours`` hours, and how long simulating/loading took.
 
     Up to ``MAX_HOURS`` the drive is simulated at that length; beyond, the one-hour drive is
-    tiled (:func:`tiled_drive`) up to ``MAX_TILED_HOURS``.
+    tiled (:func:`tiled_drive`) up to ``MAX_TILED_HOURS``.  ``reference=False`` gives the
+    :meth:`~sideslip.drive.Drive.compact` drive (no ``ref_*`` truth columns, sensor channels
+    float32) before tiling: what a method reads, and all a speed or memory measurement needs.
     """
     import sideslip.simulate as sim
     from sideslip.errors import InputError
@@ -92,7 +94,7 @@ def bench_drive(
         raise InputError("--hours", f"{hours:g}: expected more than 0 and at most {MAX_TILED_HOURS:g} h")
     timings: dict[str, float]
     if hours > MAX_HOURS:
-        base, timings = bench_drive(1.0, console, cache)
+        base, timings = bench_drive(1.0, console, cache, reference)
         start = time.perf_counter()
         drive = tiled_drive(base, hours)
         timings["tile_s"] = time.perf_counter() - start
@@ -110,7 +112,7 @@ def bench_drive(
         timings["simulate_s"] = time.perf_counter() - start
         save_drive(drive, path)
     start = time.perf_counter()
-    drive = load_drive(path)
+    drive = load_drive(path, compact=not reference)
     timings["load_parquet_s"] = time.perf_counter() - start
     timings["rows"] = float(len(drive))
     timings["columns"] = float(len(list(drive.columns())))
@@ -164,10 +166,12 @@ def measure_method(name: str, hours: float, cache: Path | None = None) -> dict[s
     Meant for a fresh child process (:func:`measure_in_subprocess`): ``rss_before_mb`` is the
     process with the drive loaded and the method compiled (warm-up on a one-minute slice),
     ``peak_rss_mb`` the high-water mark while the method runs, ``method_mb`` their difference.
+    The drive holds what the methods read (:meth:`~sideslip.drive.Drive.compact`: no ``ref_*``
+    truth columns, sensor channels in float32); ``drive_mb`` is its size.
     """
     import resource
 
-    drive, _ = bench_drive(hours, None, cache)
+    drive, _ = bench_drive(hours, None, cache, reference=False)
     vehicle = load_vehicle(drive.meta["vehicle"])
     method = all_methods()[name]
     reason = why_not(method, drive, vehicle)
@@ -203,6 +207,7 @@ def measure_method(name: str, hours: float, cache: Path | None = None) -> dict[s
         "method_mb": (peak - rss_before) / 1024.0,
         "bytes_per_row": (peak - rss_before) * 1024.0 / n,
         "peak_exact": exact,
+        "drive_mb": drive.nbytes() / 2**20,
         "nonfinite": {k: v for k, v in nonfinite.items() if v},
     }
 
@@ -270,7 +275,7 @@ def run_bench(
     load_at_start = os.getloadavg()
     if out_dir is not None:
         _check_out_dir(out_dir)
-    drive, timings = bench_drive(hours, console, cache)
+    drive, timings = bench_drive(hours, console, cache, reference=False)
     vehicle = load_vehicle(drive.meta["vehicle"])
     n = len(drive)
     warm = drive.slice(0, min(n, int(60.0 / max(drive.dt_median, 1e-3))))

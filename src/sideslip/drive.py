@@ -42,6 +42,17 @@ COLUMNS: dict[str, str] = {
     "ref_e": "m", "ref_n": "m", "ref_u": "m",
     "ref_vx": "m/s", "ref_vy": "m/s", "ref_r": "rad/s", "ref_ay": "m/s^2",
 }  # fmt: skip
+# Contract columns a compact drive (:meth:`Drive.compact`) stores in single precision (float32:
+# a 24-bit mantissa, a relative step of 6e-8, orders of magnitude below any vehicle sensor's
+# noise): the sensor channels and the receiver's stds.  ``t``, positions (m from an origin that
+# may be far away) and the user's own columns stay float64.  Storage only: ``drive[name]``
+# always returns float64, so every method computes in double precision.  A drive loaded as
+# it is keeps every column exactly as read (float64).
+SINGLE_PRECISION = frozenset(
+    ("ax", "ay", "az", "wx", "wy", "wz", "v_fl", "v_fr", "v_rl", "v_rr", "v_can", "steer",
+     "gnss_ve", "gnss_vn", "gnss_vu", "gnss_pos_std", "gnss_vel_std")
+)  # fmt: skip
+REFERENCE_PREFIX = "ref_"  # truth columns: for evaluation, never read by a method
 WHEEL_SPEEDS = ("v_fl", "v_fr", "v_rl", "v_rr")
 SPEED_COLUMNS = (*WHEEL_SPEEDS, "v_can")
 # Geodetic input the loader turns into ENU: (lat, lon, h) -> (e, n, u).
@@ -80,7 +91,9 @@ class Drive:
     """Validated columns of one drive as numpy arrays on the time base ``t`` (s).
 
     ``data`` holds every column but ``t``: the contract's (float, NaN where a slower sensor has
-    no sample) and any of the user's own, carried through untouched.  ``meta`` holds the
+    no sample; float32 for the channels of :data:`SINGLE_PRECISION` in a :meth:`compact`
+    drive, read back as float64 through ``drive[name]``) and any of the user's own, carried
+    through untouched.  ``meta`` holds the
     side-car metadata (``origin``, ``source``, notes).  ``path`` names the file for messages.
     """
 
@@ -104,6 +117,7 @@ class Drive:
         return bool(np.isfinite(col).any())
 
     def __getitem__(self, name: str) -> FloatArray:
+        """The column as float64 (a fresh copy for a column stored as float32)."""
         if name == "t":
             return self.t
         return np.asarray(self.data[name], dtype=float)
@@ -121,14 +135,47 @@ class Drive:
         """Median sample interval, s."""
         return float(np.median(np.diff(self.t))) if self.t.size > 1 else 0.0
 
+    def nbytes(self) -> int:
+        """Bytes the drive's arrays hold (``t`` and every column)."""
+        return int(self.t.nbytes + sum(np.asarray(v).nbytes for v in self.data.values()))
+
+    def without_reference(self) -> Drive:
+        """The same drive without its ``ref_*`` truth columns (no copy): what the methods see.
+
+        The reference is for evaluation only; dropping it frees its memory where a drive is
+        only estimated on (benchmarks, long drives)."""
+        data = {k: v for k, v in self.data.items() if not k.startswith(REFERENCE_PREFIX)}
+        return Drive(self.t, data, self.meta, self.path)
+
+    def compact(self) -> Drive:
+        """The drive as the methods need it, in about 40 % of the memory: no ``ref_*`` truth
+        columns, the sensor channels of :data:`SINGLE_PRECISION` as float32 (``t``, positions
+        and the user's columns shared, not copied).  Methods read float64 (``drive[name]``), so
+        their results change by the float32 rounding of their inputs only (relative 6e-8).
+        For estimating on long drives; evaluate against the full drive."""
+        data = {k: _stored(k, v) for k, v in self.without_reference().data.items()}
+        return Drive(self.t, data, self.meta, self.path)
+
     def to_frame(self) -> pd.DataFrame:
-        return pd.DataFrame({"t": self.t, **{k: np.asarray(v) for k, v in self.data.items()}})
+        """The drive as a table, every float column in double precision (as files hold it)."""
+        return pd.DataFrame({"t": self.t, **{k: _double(v) for k, v in self.data.items()}})
 
     def slice(self, start: int, stop: int) -> Drive:
         """Rows [start, stop) as a new drive (same metadata)."""
         return Drive(
             self.t[start:stop], {k: v[start:stop] for k, v in self.data.items()}, self.meta, self.path
         )
+
+
+def _double(values: Any) -> np.ndarray:
+    arr = np.asarray(values)
+    return arr.astype(np.float64) if arr.dtype == np.float32 else arr
+
+
+def _stored(name: str, values: np.ndarray) -> np.ndarray:
+    """A column as a compact drive keeps it (:data:`SINGLE_PRECISION`)."""
+    arr = np.asarray(values)
+    return arr.astype(np.float32) if name in SINGLE_PRECISION and arr.dtype.kind == "f" else arr
 
 
 # ------------------------------------------------------------------------------------------
@@ -326,9 +373,11 @@ def _read_csv(p: Path, src: str) -> pd.DataFrame:
     return frame
 
 
-def _read_parquet(p: Path, src: str, meta: dict[str, Any]) -> pd.DataFrame:
-    _check_names([str(n) for n in pq.read_schema(p).names], src)
-    table = pq.ParquetFile(p).read()
+def _read_parquet(p: Path, src: str, meta: dict[str, Any], reference: bool = True) -> pd.DataFrame:
+    names = [str(n) for n in pq.read_schema(p).names]
+    _check_names(names, src)
+    keep = None if reference else [n for n in names if not n.startswith(REFERENCE_PREFIX)]
+    table = pq.ParquetFile(p).read(columns=keep)
     kv = table.schema.metadata or {}
     if b"sideslip" in kv:
         meta.update(json.loads(kv[b"sideslip"]))
@@ -337,11 +386,12 @@ def _read_parquet(p: Path, src: str, meta: dict[str, Any]) -> pd.DataFrame:
     return frame
 
 
-def read_table(path: str | Path) -> tuple[pd.DataFrame, dict[str, Any]]:
+def read_table(path: str | Path, reference: bool = True) -> tuple[pd.DataFrame, dict[str, Any]]:
     """Read a CSV or Parquet table and its metadata; unreadable files raise InputError.
 
     Columns named twice and cells too long to be values (:data:`MAX_CELL_CHARS`) are errors
-    naming the column (and row).
+    naming the column (and row).  ``reference=False`` skips a Parquet file's ``ref_*``
+    columns (a CSV is read whole).
     """
     p = Path(path)
     src = str(path)
@@ -352,7 +402,7 @@ def read_table(path: str | Path) -> tuple[pd.DataFrame, dict[str, Any]]:
         raise InputError(src, "cannot read: no such file")
     meta: dict[str, Any] = {}
     try:
-        frame = _read_csv(p, src) if suffix == ".csv" else _read_parquet(p, src, meta)
+        frame = _read_csv(p, src) if suffix == ".csv" else _read_parquet(p, src, meta, reference)
     except (OSError, ValueError, pa.ArrowException, json.JSONDecodeError, UnicodeDecodeError) as exc:
         first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
         raise InputError(src, f"cannot read as {suffix[1:]}: {first[:200]}") from None
@@ -368,13 +418,19 @@ def read_table(path: str | Path) -> tuple[pd.DataFrame, dict[str, Any]]:
     return frame, meta
 
 
-def load_drive(path: str | Path) -> Drive:
-    """Load and validate a drive (CSV or Parquet by extension); geodetic columns -> ENU."""
-    frame, meta = read_table(path)
+def load_drive(path: str | Path, compact: bool = False) -> Drive:
+    """Load and validate a drive (CSV or Parquet by extension); geodetic columns -> ENU.
+
+    ``compact``: return :meth:`Drive.compact` (what the methods need: no ``ref_*`` columns,
+    sensor channels float32); a Parquet file's reference columns are then not even read.
+    """
+    frame, meta = read_table(path, reference=not compact)
     cols = validate_frame(frame, str(path))
+    del frame  # memory: the validated arrays are all that is kept
     _geodetic_to_enu(cols, meta, str(path))
     t = cols.pop("t")
-    return Drive(t=t, data=cols, meta=meta, path=str(path))
+    drive = Drive(t=t, data=cols, meta=meta, path=str(path))
+    return drive.compact() if compact else drive
 
 
 def save_table(frame: pd.DataFrame, path: str | Path, meta: Mapping[str, Any] | None = None) -> None:

@@ -20,13 +20,16 @@ method's own health (the larger of the two wins):
   accelerometer-integrated speed from the last trusted sample (within ``1 m/s + 10 %``), at
   most ``MAX_EVENT_S``.
 
-All vectorised (O(N)) except the short forward scan of each wheel-speed event.
+One compiled pass per input (O(N), a few bytes per row of temporaries) plus the short forward
+scan of each wheel-speed event.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable
 
+import numba
 import numpy as np
 from numpy.typing import NDArray
 
@@ -42,23 +45,51 @@ JUMP_SPAN_S = 0.1  # s: speed changes are judged over at least this span
 JUMP_NOISE = 0.5  # m/s: allowance for wheel-speed noise and quantisation over that span
 
 
-def _age_since_sample(values: FloatArray, t: FloatArray) -> FloatArray:
-    ok = np.isfinite(values)
-    idx = np.where(ok, np.arange(values.size), -1)
-    np.maximum.accumulate(idx, out=idx)
-    return np.where(idx >= 0, t - t[np.maximum(idx, 0)], np.inf)
+@numba.njit(cache=True)
+def _sample_intervals(values: FloatArray, t: FloatArray) -> FloatArray:  # pragma: no cover
+    """Time steps (s) between consecutive finite samples of ``values``."""
+    n_ok = 0
+    for k in range(values.size):
+        if math.isfinite(values[k]):
+            n_ok += 1
+    out = np.empty(max(n_ok - 1, 0))
+    last, j = -1, 0
+    for k in range(values.size):
+        if math.isfinite(values[k]):
+            if last >= 0:
+                out[j] = t[k] - t[last]
+                j += 1
+            last = k
+    return out
 
 
-def dropout_health(values: FloatArray, t: FloatArray) -> FloatArray:
-    """0 while the sensor reports, rising to 1 over a second past its allowed silence."""
-    rows = np.flatnonzero(np.isfinite(values))
-    if rows.size < 2:
-        return np.zeros(t.size)
-    interval = float(np.median(np.diff(t[rows])))
-    allowed = max(5.0 * interval, 0.2)
-    age = _age_since_sample(values, t)
-    age = np.where(np.isfinite(age), age, 0.0)  # before the first sample: the method's prior
-    return np.clip((age - allowed) / 1.0, 0.0, 1.0)
+@numba.njit(cache=True)
+def _dropout(values: FloatArray, t: FloatArray, allowed: float,
+             out: FloatArray) -> None:  # pragma: no cover - compiled
+    """out = max(out, clip(age - allowed, 0, 1)), age = time since the last finite sample
+    (0 before the first: the method's prior covers it)."""
+    last = -1
+    for k in range(values.size):
+        if math.isfinite(values[k]):
+            last = k
+        if last >= 0:
+            h = min(max((t[k] - t[last] - allowed) / 1.0, 0.0), 1.0)
+            if h > out[k]:
+                out[k] = h
+
+
+def dropout_health(values: FloatArray, t: FloatArray, out: FloatArray | None = None) -> FloatArray:
+    """0 while the sensor reports, rising to 1 over a second past its allowed silence.
+
+    ``out``: an array to raise in place to the larger of itself and this health (memory)."""
+    health = np.zeros(t.size) if out is None else out
+    steps = _sample_intervals(np.asarray(values, dtype=float), t)
+    if steps.size < 1:
+        return health
+    interval = float(np.median(steps))
+    del steps
+    _dropout(np.asarray(values, dtype=float), t, max(5.0 * interval, 0.2), health)
+    return health
 
 
 def clock_jump_health(t: FloatArray, recover_s: float = 5.0) -> FloatArray:
@@ -78,25 +109,16 @@ def wheel_speed_health(speed: FloatArray, t: FloatArray, ax: FloatArray | None) 
     """1 from a physically impossible speed change until the speed rejoins the ax-integrated
     speed (module docstring); 0 elsewhere."""
     out = np.zeros(t.size)
-    rows = np.flatnonzero(np.isfinite(speed))
-    if rows.size < 3:
+    starts = _jump_starts(speed, t, IMPLAUSIBLE_ACCEL, JUMP_SPAN_S, JUMP_NOISE)
+    if starts.size == 0:
         return out
-    # speed change over at least JUMP_SPAN_S (robust to sample noise at any rate)
-    ts, vs = t[rows], speed[rows]
-    later = np.minimum(np.searchsorted(ts, ts + JUMP_SPAN_S, side="left"), ts.size - 1)
-    dv, dts = vs[later] - vs, ts[later] - ts
-    jump = (later > np.arange(ts.size)) & (np.abs(dv) > IMPLAUSIBLE_ACCEL * dts + JUMP_NOISE)
-    if not jump.any():
-        return out
-    jumps = np.flatnonzero(jump & ~np.r_[False, jump[:-1]])  # the first row of each event
     ax_held = np.zeros(t.size)
     if ax is not None:
         ok = np.isfinite(ax)
         if ok.any():
             ax_held = np.interp(t, t[ok], ax[ok])
     end_prev = -1
-    for j in jumps:
-        start = rows[j]  # last trusted sample
+    for start in starts:  # the last trusted sample before each event
         if start <= end_prev:
             continue
         stop = int(np.searchsorted(t, t[start] + MAX_EVENT_S, side="right"))
@@ -119,6 +141,40 @@ def wheel_speed_health(speed: FloatArray, t: FloatArray, ax: FloatArray | None) 
     return out
 
 
+@numba.njit(cache=True)
+def _jump_starts(speed: FloatArray, t: FloatArray, accel: float, span_s: float, noise: float
+                 ) -> NDArray[np.int64]:  # pragma: no cover - compiled
+    """Rows of the first sample of each run of implausible speed changes: over at least
+    ``span_s`` (to the first later sample at or past it, else the last sample) the speed
+    changes by more than ``accel`` dt + ``noise``.  Finite samples only."""
+    n = speed.size
+    last_ok, n_ok = -1, 0
+    for k in range(n):
+        if math.isfinite(speed[k]):
+            last_ok = k
+            n_ok += 1
+    starts = [0 for _ in range(0)]
+    if n_ok < 3:
+        return np.empty(0, dtype=np.int64)
+    p = 0
+    prev_jump = False
+    for i in range(n):
+        if not math.isfinite(speed[i]):
+            continue
+        target = t[i] + span_s
+        while p < n and (not math.isfinite(speed[p]) or t[p] < target):
+            p += 1
+        later = p if p < n else last_ok
+        jump = later > i and abs(speed[later] - speed[i]) > accel * (t[later] - t[i]) + noise
+        if jump and not prev_jump:
+            starts.append(i)
+        prev_jump = jump
+    out = np.empty(len(starts), dtype=np.int64)
+    for j in range(len(starts)):
+        out[j] = starts[j]
+    return out
+
+
 PER_ROW_INPUTS = frozenset(
     ("ax", "ay", "az", "wx", "wy", "wz", "steer", "v_fl", "v_fr", "v_rl", "v_rr", "v_can")
 )
@@ -134,8 +190,8 @@ def input_health(drive: Drive, columns: Iterable[str], speed: FloatArray | None 
     health = clock_jump_health(t)
     for name in columns:
         if name in PER_ROW_INPUTS and name in drive:
-            health = np.maximum(health, dropout_health(drive[name], t))
+            dropout_health(drive[name], t, out=health)
     if speed is not None:
         ax = drive["ax"] if "ax" in drive else None
-        health = np.maximum(health, wheel_speed_health(np.asarray(speed, dtype=float), t, ax))
+        np.maximum(health, wheel_speed_health(np.asarray(speed, dtype=float), t, ax), out=health)
     return health

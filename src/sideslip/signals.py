@@ -8,6 +8,9 @@ measurement (age 0) from a held one.
 
 from __future__ import annotations
 
+import math
+
+import numba
 import numpy as np
 from numpy.typing import NDArray
 
@@ -60,23 +63,38 @@ def interpolate(values: FloatArray, t: FloatArray, max_gap_s: float = np.inf) ->
     return out
 
 
+def _wheel_names(drive: Drive, prefer: str) -> list[str]:
+    names = ("v_rl", "v_rr") if prefer == "rear" else WHEEL_SPEEDS
+    present = [n for n in names if n in drive]
+    if len(present) < (2 if prefer == "rear" else 1):
+        present = [n for n in WHEEL_SPEEDS if n in drive]
+    return present
+
+
 def wheel_speed(drive: Drive, prefer: str = "rear") -> FloatArray | None:
     """Vehicle speed (m/s) from wheel speeds: mean of the rear (undriven on FWD cars) or all.
 
     ``prefer='rear'`` uses the rear pair when both exist, else every wheel present.  Rows with no
-    wheel sample stay NaN.  Returns None when the drive has no wheel speed.
+    wheel sample stay NaN.  Returns None when the drive has no wheel speed.  Summed one wheel
+    at a time (a few bytes per row of temporaries, not a stack of every wheel).
     """
-    names = ("v_rl", "v_rr") if prefer == "rear" else WHEEL_SPEEDS
-    cols = [drive[n] for n in names if n in drive]
-    if len(cols) < (2 if prefer == "rear" else 1):
-        cols = [drive[n] for n in WHEEL_SPEEDS if n in drive]
-    if not cols:
+    names = _wheel_names(drive, prefer)
+    if not names:
         return None
-    stack = np.vstack(cols)
-    with np.errstate(invalid="ignore"):
-        count = np.isfinite(stack).sum(axis=0)
-        total = np.nansum(stack, axis=0)
-    return np.where(count > 0, total / np.maximum(count, 1), np.nan)
+    count = np.zeros(len(drive))
+    total = np.zeros(len(drive))
+    for k, name in enumerate(names):
+        col = drive[name]
+        ok = np.isfinite(col)
+        count += ok
+        if k == 0:
+            total = np.where(ok, col, 0.0)
+        else:
+            total += np.where(ok, col, 0.0)
+        del col, ok
+    np.divide(total, np.maximum(count, 1.0), out=total)
+    total[count == 0] = np.nan
+    return total
 
 
 def vehicle_speed(drive: Drive) -> FloatArray:
@@ -94,7 +112,7 @@ def vehicle_speed(drive: Drive) -> FloatArray:
 
 def speed_source(drive: Drive) -> str:
     """Which column(s) :func:`vehicle_speed` reads: 'wheels', 'v_can', 'gnss' or 'none'."""
-    if wheel_speed(drive) is not None:
+    if _wheel_names(drive, "rear"):
         return "wheels"
     if "v_can" in drive:
         return "v_can"
@@ -168,31 +186,79 @@ def white_noise_sigma_100hz(t: FloatArray, x: FloatArray, max_dt: float = 0.05) 
     sqrt(100 Hz / rate).  None with fewer than 200 usable triples or slower sampling than
     ``max_dt``.
     """
-    rows = np.flatnonzero(np.isfinite(x))
-    if rows.size < 203:
+    n_ok = int(np.count_nonzero(np.isfinite(x)))
+    if n_ok < 203:
         return None
-    ts, xs = t[rows], x[rows]
-    dt = np.diff(ts)
-    ok = (dt[1:] <= max_dt) & (dt[:-1] <= max_dt) & (np.abs(dt[1:] - dt[:-1]) < 0.1 * dt[1:])
-    if ok.sum() < 200:
+    d2, steps = _second_differences(np.asarray(t, dtype=float), np.asarray(x, dtype=float), max_dt)
+    if d2.size < 200:
         return None
-    d2 = (xs[2:] - 2.0 * xs[1:-1] + xs[:-2])[ok]
-    step = float(np.median(dt[1:][ok]))
+    step = float(np.median(steps))
+    del steps
     mad = float(np.median(np.abs(d2 - np.median(d2))))
     sigma = 1.4826 * mad / np.sqrt(6.0)
     return float(sigma * np.sqrt(step / 0.01))
 
 
+@numba.njit(cache=True)
+def _second_differences(t: FloatArray, x: FloatArray, max_dt: float
+                        ) -> tuple[FloatArray, FloatArray]:  # pragma: no cover - compiled
+    """x_k+1 - 2 x_k + x_k-1 over consecutive finite samples, and the step t_k+1 - t_k, where
+    both steps are at most ``max_dt`` and within 10 % of each other (one pass, no copies)."""
+    n = x.size
+    n_ok = 0
+    for i in range(n):
+        if math.isfinite(x[i]):
+            n_ok += 1
+    d2 = np.empty(max(n_ok - 2, 0))
+    steps = np.empty(max(n_ok - 2, 0))
+    m = 0
+    seen = 0
+    t1 = x1 = t2 = x2 = 0.0  # the previous finite sample (1) and the one before (2)
+    for i in range(n):
+        if not math.isfinite(x[i]):
+            continue
+        if seen >= 2:
+            dt_new = t[i] - t1
+            dt_old = t1 - t2
+            if dt_new <= max_dt and dt_old <= max_dt and abs(dt_new - dt_old) < 0.1 * dt_new:
+                d2[m] = x[i] - 2.0 * x1 + x2
+                steps[m] = dt_new
+                m += 1
+        t2, x2 = t1, x1
+        t1, x1 = t[i], x[i]
+        seen += 1
+    return d2[:m], steps[:m]
+
+
 def causal_mean(t: FloatArray, x: FloatArray, window_s: float) -> FloatArray:
-    """Causal moving mean over ``window_s`` of the finite samples (0 where none yet)."""
-    v = np.where(np.isfinite(x), x, 0.0)
-    c = np.isfinite(x).astype(float)
-    cv = np.concatenate(([0.0], np.cumsum(v)))
-    cc = np.concatenate(([0.0], np.cumsum(c)))
-    j = np.searchsorted(t, t - window_s, side="right")
-    i = np.arange(t.size) + 1
-    cnt = cc[i] - cc[j]
-    return np.asarray(np.where(cnt > 0, (cv[i] - cv[j]) / np.maximum(cnt, 1.0), 0.0), dtype=float)
+    """Causal moving mean over ``window_s`` of the finite samples (0 where none yet).
+
+    The mean over the rows j with t_j > t_k - window_s, j <= k, from prefix sums (one compiled
+    pass, 24 B/row of temporaries)."""
+    tt = np.ascontiguousarray(t, dtype=float)
+    return np.asarray(_causal_mean(tt, np.ascontiguousarray(x, dtype=float), tt - window_s))
+
+
+@numba.njit(cache=True)
+def _causal_mean(t: FloatArray, x: FloatArray, start: FloatArray
+                 ) -> FloatArray:  # pragma: no cover - compiled
+    n = t.size
+    cv = np.empty(n + 1)
+    cc = np.empty(n + 1)
+    cv[0] = 0.0
+    cc[0] = 0.0
+    for i in range(n):
+        ok = math.isfinite(x[i])
+        cv[i + 1] = cv[i] + (x[i] if ok else 0.0)
+        cc[i + 1] = cc[i] + (1.0 if ok else 0.0)
+    out = np.empty(n)
+    j = 0
+    for i in range(n):
+        while j < n and t[j] <= start[i]:  # searchsorted(t, t - window, side="right")
+            j += 1
+        cnt = cc[i + 1] - cc[j]
+        out[i] = (cv[i + 1] - cv[j]) / max(cnt, 1.0) if cnt > 0 else 0.0
+    return out
 
 
 GRAVITY_M_S2 = 9.80665

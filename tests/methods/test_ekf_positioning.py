@@ -24,7 +24,7 @@ from sideslip.methods.ekf_filter import GNSS_REJECTED
 from sideslip.methods.ekf_positioning import EkfResult, EkfTuning, run_ekf
 from sideslip.methods.registry import all_methods, run_method
 from sideslip.models.kinematic import steer_yaw_rate
-from sideslip.models.kinematic_ekf import BD, DW, KD, KU, SW, E, N
+from sideslip.models.kinematic_ekf import BD, BG, DW, KD, KU, SW, E, N
 from sideslip.simulate.sensors import SensorConfig, sensor_columns
 from sideslip.simulate.truth import Truth
 from sideslip.vehicle import Vehicle, load_vehicle
@@ -108,8 +108,8 @@ def _smooth_steps(t: np.ndarray, knots: list[tuple[float, float]], rise: float =
 def test_wheel_scale_factors_converge_to_the_drives_effective_values(use_gyro):
     drive, res = _suburban(use_gyro)
     true = drive.meta["truth_sensor"]["wheel_scale_factor"]  # [FL, FR, RL, RR]
-    sd = np.sqrt(res.var[-1])
-    x = res.x[-1]
+    sd = np.sqrt(res.var_final)
+    x = res.x_final
     ok = np.isfinite(drive["v_rl"]) & (drive["ref_vx"] > 0.5)
     vx, r = drive["ref_vx"][ok], drive["ref_r"][ok]
     u_rl = vx - r * SEDAN.track_rear / 2
@@ -139,7 +139,7 @@ def test_steering_calibration_recovers_the_true_yaw_gain_and_offset(use_gyro):
     # steering -> yaw-rate gain against the truth yaw rate in turns, where yaw lag and road
     # bank limit it to about 1 % (the uncalibrated model is 2-4 % off on seeds 0-2).
     drive, res = _suburban(use_gyro)
-    x, sd = res.x[-1], np.sqrt(res.var[-1])
+    x, sd = res.x_final, np.sqrt(res.var_final)
     ts = drive.meta["truth_sensor"]
     st = drive["steer"]
     ok = np.isfinite(st) & (np.abs(drive["ref_r"]) > 0.05) & (drive["ref_vx"] > 3.0)
@@ -164,8 +164,8 @@ def test_gyro_bias_converges_to_the_drives_mean_bias():
     bias = drive.meta["truth_sensor"]["gyro_bias_mean"][2]
     # the gyro also has a 0.2 % scale factor and 0.1 deg misalignment: in turns of 0.3 rad/s
     # that is 6e-4 rad/s, seen only briefly, so 3 sigma + 2e-4 rad/s.
-    sd = math.sqrt(res.var[-1, -1])
-    assert abs(res.x[-1, -1] - bias) < 3 * sd + 2e-4
+    sd = math.sqrt(res.var_final[BG])
+    assert abs(res.x_final[BG] - bias) < 3 * sd + 2e-4
 
 
 # ------------------------------------------------------------------------------------------

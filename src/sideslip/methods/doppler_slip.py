@@ -413,6 +413,7 @@ def run_doppler_slip(drive: Drive, vehicle: Vehicle, use_roll: bool = True,
             roll = roll_from_lateral(ay_s, r_s, v_h, scan.ay_bias, transient)
             roll_raw = roll_from_lateral(ay_s, r_s, v_h, 0.0, transient)
             rate_h = horizontal_yaw_rate(wz, 0.0, roll, pitch)
+            del stiff, r_stiff, rate_c, transient  # memory: per-row arrays of this pass
         fit = fit_heading(t, rate_h, samples, select, offset_rows, still_rows, wz)
         r_corr = fit.gyro_scale * wz - fit.gyro_bias * fit.gyro_scale
         r_s = moving_average(r_corr, width)
@@ -430,6 +431,7 @@ def run_doppler_slip(drive: Drive, vehicle: Vehicle, use_roll: bool = True,
 
     if fit is None:  # pragma: no cover - N_PASSES >= 1
         raise RuntimeError("heading fit did not run")
+    del rate_h, r_est, gy_raw, ay_s, beta_r_model, still  # memory: the passes' per-row arrays
     r_corr = fit.gyro_scale * wz - fit.gyro_bias * fit.gyro_scale
     r_s = moving_average(r_corr, width)
     gy = r_s * v_h + (G * np.sin(roll) if use_roll else 0.0)
@@ -542,7 +544,10 @@ def run_doppler_slip(drive: Drive, vehicle: Vehicle, use_roll: bool = True,
         **fit.params(),
     )
     for key, value in series.items():
-        series[key] = np.nan_to_num(np.asarray(value, dtype=float), nan=0.0, posinf=0.0, neginf=0.0)
+        arr = np.asarray(value, dtype=float)
+        if not np.isfinite(arr).all():  # copy only the series that need it (memory)
+            arr = np.nan_to_num(arr, nan=0.0, posinf=0.0, neginf=0.0)
+        series[key] = arr
     innovations = {"doppler_sideslip": check.innovation, "doppler_sideslip_nis": check.nis}
     return Estimate("doppler_slip" if use_roll else "doppler_slip_noroll", t, series, params,
                     innovations)

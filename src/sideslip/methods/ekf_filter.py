@@ -42,6 +42,14 @@ from sideslip.models.kinematic_ekf import (
 
 FloatArray = NDArray[np.float64]
 
+# States stored on every row (the estimate's series and K_us, which scales the bank term of
+# beta_std), in this column order: the first five columns are also the state indices E, N,
+# PSI, V, R.  The other calibration states (scale factors, offsets, road and GNSS errors) are
+# reported at the end of the drive only, so the loop keeps their final value (``x_final``,
+# ``var_final``) instead of a row each: 112 B/row for states and variances, not 224.
+ROW_STATES = (E, N, PSI, V, R, KU, BG)
+ROW_COLUMN = {state: col for col, state in enumerate(ROW_STATES)}
+
 # GNSS row flags in EkfResult.gnss_flag
 GNSS_NONE, GNSS_USED, GNSS_REJECTED, GNSS_FORCED = 0, 1, 2, 3
 
@@ -155,11 +163,12 @@ def ekf_loop(
     P0: FloatArray,
     c: LoopConsts,
 ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, NDArray[np.int8],
-           FloatArray, FloatArray, FloatArray]:  # fmt: skip
+           FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:  # fmt: skip
     tu = c.tuning
     n_rows = t.size
-    xs = np.empty((n_rows, NX))
-    vs = np.empty((n_rows, NX))
+    n_kept = len(ROW_STATES)
+    xs = np.empty((n_rows, n_kept))
+    vs = np.empty((n_rows, n_kept))
     cov_en = np.empty(n_rows)
     beta = np.zeros(n_rows)
     beta_var = np.zeros(n_rows)
@@ -284,9 +293,9 @@ def ekf_loop(
                 pred_e, pred_n, he, hn = gnss_model(x, c.ant_x, c.ant_y)
                 update_scalar_nb(x, P, gnss_n[k] - pred_n, hn, rv)
         # --- store --------------------------------------------------------------------------
-        xs[k] = x
-        for i in range(NX):
-            vs[k, i] = P[i, i]
+        for j in range(n_kept):
+            xs[k, j] = x[ROW_STATES[j]]
+            vs[k, j] = P[ROW_STATES[j], ROW_STATES[j]]
         cov_en[k] = P[E, N]
         if have_steer:
             k1 = 1.0 + x[KD]
@@ -302,4 +311,7 @@ def ekf_loop(
             beta_var[k] = dbeta * dbeta * var_dc  # the slip term is added by the caller
         else:
             beta_var[k] = (c.lr / L * 0.5) ** 2  # no steering yet: +-0.5 rad of road wheel
-    return xs, vs, cov_en, beta, beta_var, flags, nis_steer, nis_gyro, nis_gnss
+    var_final = np.empty(NX)
+    for i in range(NX):
+        var_final[i] = P[i, i]
+    return xs, vs, cov_en, beta, beta_var, flags, nis_steer, nis_gyro, nis_gnss, x.copy(), var_final

@@ -131,6 +131,7 @@ from sideslip.methods.ekf_filter import (
     GNSS_FORCED,
     GNSS_REJECTED,
     GNSS_USED,
+    ROW_COLUMN,
     LoopConsts,
     LoopTuning,
     ekf_loop,
@@ -240,12 +241,15 @@ def _loop_tuning(tu: EkfTuning) -> LoopTuning:
 class EkfResult:
     """Filter output on the drive's time base (N rows).
 
-    ``x`` (N, 14) states after the updates of each row (see module docstring and
-    ``STATE_NAMES``), ``var`` (N, 14) their variances, ``cov_en`` (N,) the e-n covariance
-    (for the error ellipse), ``beta`` and ``beta_var`` the kinematic sideslip (eq 2.3) and
-    its variance, ``gnss_flag`` (N,) int8 GNSS_NONE/USED/REJECTED/FORCED, ``align`` the
-    initial-alignment summary, ``nis_steer``/``nis_gyro``/``nis_gnss`` the NIS of each row's
-    steering (1 dof), gyro (1 dof) and GNSS (2 dof, before gating) updates, NaN where none.
+    ``x`` (N, 7) the states of :data:`~sideslip.methods.ekf_filter.ROW_STATES` (e, n, yaw, v, r,
+    K_us, gyro bias: columns 0-4 are the state indices E ... R, ``ROW_COLUMN[s]`` the column of
+    state s) after the updates of each row, ``var`` (N, 7) their variances; ``x_final`` and
+    ``var_final`` (14,) every state (``STATE_NAMES``) and its variance after the last row;
+    ``cov_en`` (N,) the e-n covariance (for the error ellipse), ``beta`` and ``beta_var`` the
+    kinematic sideslip (eq 2.3) and its variance, ``gnss_flag`` (N,) int8
+    GNSS_NONE/USED/REJECTED/FORCED, ``align`` the initial-alignment summary,
+    ``nis_steer``/``nis_gyro``/``nis_gnss`` the NIS of each row's steering (1 dof), gyro (1 dof)
+    and GNSS (2 dof, before gating) updates, NaN where none.
     """
 
     x: FloatArray
@@ -258,6 +262,8 @@ class EkfResult:
     nis_steer: FloatArray
     nis_gyro: FloatArray
     nis_gnss: FloatArray
+    x_final: FloatArray
+    var_final: FloatArray
 
 
 # ------------------------------------------------------------------------------------------
@@ -375,7 +381,11 @@ def _estimate(
 ) -> Estimate:
     x, var = res.x, res.var
     t = drive.t
-    sd = np.sqrt(np.maximum(var, 0.0))
+    # the gyro's identified noise, for params: first, while few per-row arrays exist (memory)
+    g_sigma, g_source = _gyro_sigma(drive, tu) if use_gyro else (math.nan, "")
+    sd = np.sqrt(np.maximum(var, 0.0, out=var), out=var)  # in place: res is this call's own
+    x_last, sd_last = res.x_final, np.sqrt(np.maximum(res.var_final, 0.0))
+    bg = ROW_COLUMN[BG]
     inflation = np.ones(t.size)
     health = np.zeros(t.size)
     health_params: dict[str, Any] = {"criterion": "off"}
@@ -385,6 +395,8 @@ def _estimate(
     if tu.consistency_window_s > 0:
         cons = binned_nis_consistency(t, nis_sum, dof, tu.consistency_window_s)
         inflation, health, health_params = cons.inflation, cons.health, cons.summary(t)
+        del cons  # memory: its other per-row series are not needed
+    del nis_sum, dof
     k = np.sqrt(inflation)
     # road bank: the car crabs by k_slip g sin(bank) on a bank while the driver holds
     # delta = K_us g sin(bank) (read by eq 2.3 as lr/L delta of sideslip); the bank from the
@@ -393,7 +405,7 @@ def _estimate(
     sin_bank = np.full(t.size, tu.road_bank_sigma) if cue is None else np.hypot(0.01, cue)
     _, _, slip_gain = _vehicle_model_numbers(vehicle, tu)
     lr_l = vehicle.lr / vehicle.wheelbase
-    bank_beta = (slip_gain + lr_l * np.abs(x[:, KU])) * G * sin_bank
+    bank_beta = (slip_gain + lr_l * np.abs(x[:, ROW_COLUMN[KU]])) * G * sin_bank
     # the kinematic model's own error, the rear-axle slip angle ~ k_slip |a_y| (a_y ~ v r),
     # at least its RMS over the last SLIP_WINDOW_S (transients shift its phase)
     ay = x[:, V] * x[:, R]
@@ -416,22 +428,21 @@ def _estimate(
         "health": health,
     }
     if use_gyro:
-        series["gyro_bias"] = x[:, BG]
-        series["gyro_bias_std"] = sd[:, BG]
-    last = -1
+        series["gyro_bias"] = x[:, bg]
+        series["gyro_bias_std"] = sd[:, bg]
     params: dict[str, Any] = {
-        "wheel_speed_scale": float(1.0 + x[last, SW]),
-        "wheel_speed_scale_sigma": float(sd[last, SW]),
-        "wheel_speed_scale_rl": float(1.0 + x[last, SW] - x[last, DW]),
-        "wheel_speed_scale_rr": float(1.0 + x[last, SW] + x[last, DW]),
-        "wheel_speed_scale_half_diff": float(x[last, DW]),
-        "wheel_speed_scale_half_diff_sigma": float(sd[last, DW]),
-        "steer_scale": float(1.0 + x[last, KD]),
-        "steer_scale_sigma": float(sd[last, KD]),
-        "steer_offset_rad": float(x[last, BD]),
-        "steer_offset_rad_sigma": float(sd[last, BD]),
-        "understeer_gradient_rad_m_s2": float(x[last, KU]),
-        "understeer_gradient_rad_m_s2_sigma": float(sd[last, KU]),
+        "wheel_speed_scale": float(1.0 + x_last[SW]),
+        "wheel_speed_scale_sigma": float(sd_last[SW]),
+        "wheel_speed_scale_rl": float(1.0 + x_last[SW] - x_last[DW]),
+        "wheel_speed_scale_rr": float(1.0 + x_last[SW] + x_last[DW]),
+        "wheel_speed_scale_half_diff": float(x_last[DW]),
+        "wheel_speed_scale_half_diff_sigma": float(sd_last[DW]),
+        "steer_scale": float(1.0 + x_last[KD]),
+        "steer_scale_sigma": float(sd_last[KD]),
+        "steer_offset_rad": float(x_last[BD]),
+        "steer_offset_rad_sigma": float(sd_last[BD]),
+        "understeer_gradient_rad_m_s2": float(x_last[KU]),
+        "understeer_gradient_rad_m_s2_sigma": float(sd_last[KU]),
         "scale_convention": "scale = measured / true (1.0 = perfect); offset in the sensor's unit",
         "gnss_fixes_used": int(np.sum(res.gnss_flag == GNSS_USED)),
         "gnss_fixes_rejected": int(np.sum(res.gnss_flag == GNSS_REJECTED)),
@@ -443,9 +454,8 @@ def _estimate(
         "settings": settings_dict(tu),
     }
     if use_gyro:
-        g_sigma, g_source = _gyro_sigma(drive, tu)
-        params["gyro_bias_rad_s"] = float(x[last, BG])
-        params["gyro_bias_rad_s_sigma"] = float(sd[last, BG])
+        params["gyro_bias_rad_s"] = float(x_last[BG])
+        params["gyro_bias_rad_s_sigma"] = float(sd_last[BG])
         params["noise"] = {"gyro_sigma_rad_s": g_sigma, "gyro_sigma_source": g_source,
                            "criterion": "gyro white noise from second differences of wz"}  # fmt: skip
     innovations = {"steer_nis": res.nis_steer, "gyro_nis": res.nis_gyro, "gnss_nis": res.nis_gnss}

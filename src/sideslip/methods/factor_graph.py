@@ -99,7 +99,6 @@ from sideslip.methods.fg_tuning import (
     choose_sigmas,
 )
 from sideslip.methods.registry import SPEED, register
-from sideslip.models.single_track import continuous_arrays
 from sideslip.signals import hold, vehicle_speed
 from sideslip.vehicle import Vehicle
 
@@ -206,19 +205,16 @@ def build_graph(
     n = t.size
     delta = inputs.delta[sl]
     low = inputs.low_speed[sl]
-    # one model evaluation at the a_y factor's speed; the dynamics' (clamped higher only where
-    # forward Euler needs it, module docstring) re-evaluated on those few rows
-    v_dyn = inputs.v_dynamics[sl]
-    A, B, C, D = continuous_arrays(vehicle, inputs.v_measurement[sl], v_min=settings.speed_gate)
-    faster = np.flatnonzero(v_dyn != inputs.v_measurement[sl])
-    if faster.size:
-        A[faster], B[faster], _, _ = continuous_arrays(vehicle, v_dyn[faster], v_min=settings.speed_gate)
-
+    # the single-track matrices row by row inside the compiled pass: dynamics at their speed
+    # (clamped higher where forward Euler needs it, module docstring), a_y at the model speed
+    model = np.array([vehicle.mass, vehicle.yaw_inertia, vehicle.lf, vehicle.lr, vehicle.cf,
+                      vehicle.cr, settings.speed_gate], dtype=float)  # fmt: skip
     gap = inputs.time_gap[start : start + n - 1]
     sigmas = np.array([settings.sigma(k) for k in ("model_beta", "model_yaw_rate", "yaw_rate",
                                                    "lateral_acceleration")])  # fmt: skip
     F, g, sigma_q, Hu, zu, sigma_u = chain_factors(
-        t, A, B, C, D, delta, low, gap, inputs.wz[sl], inputs.ay[sl], sigmas,
+        t, inputs.v_dynamics[sl], inputs.v_measurement[sl], model, delta, low, gap,
+        inputs.wz[sl], inputs.ay[sl], sigmas,
         settings.reference_dt, settings.low_speed_inflation, settings.prior_beta,
         settings.prior_yaw_rate, settings.low_speed_beta,
     )  # fmt: skip

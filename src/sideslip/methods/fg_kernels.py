@@ -12,16 +12,17 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from sideslip.models.single_track import single_track_row
+
 FloatArray = NDArray[np.float64]
 
 
 @numba.njit(cache=True)
 def chain_factors(
     t: FloatArray,
-    A: FloatArray,
-    B: FloatArray,
-    C: FloatArray,
-    D: FloatArray,
+    v_dyn: FloatArray,
+    v_meas: FloatArray,
+    model: FloatArray,
     delta: FloatArray,
     low: NDArray[np.bool_],
     gap: NDArray[np.bool_],
@@ -38,6 +39,11 @@ def chain_factors(
     the rows (layout of :class:`~sideslip.methods.factor_graph.SideslipGraph`; the low-speed
     factor's value is filled by the caller).
 
+    ``model`` = [m, I_z, l_f, l_r, c_f, c_r, v_min]: the single-track matrices
+    (:func:`sideslip.models.single_track.single_track_row`) row by row, A and B at the
+    dynamics' speed ``v_dyn``, C and D at the a_y factor's ``v_meas`` (both clamped at v_min),
+    never stored for the whole drive.
+
     Dynamic factor k: F = I + dt A_k, g = dt B_k delta_k (forward Euler, paper eq 6), sigmas
     ``sigmas[:2]`` x sqrt(dt / reference_dt), x ``low_speed_inflation`` below the speed gate;
     across a time gap F = 0, g = 0 and the prior's sigmas (a restart).  Unary factors: yaw
@@ -45,6 +51,11 @@ def chain_factors(
     (``sigmas[3]``), low-speed beta (``low_speed_beta``) below it; sigma inf where absent.
     """
     n = t.size
+    m, iz, lf, lr, cf, cr, v_min = model[0], model[1], model[2], model[3], model[4], model[5], model[6]
+    A = np.empty((2, 2))
+    B = np.empty((2, 2))
+    C = np.empty((2, 2))
+    D = np.empty((2, 2))
     F = np.empty((n - 1, 2, 2))
     g = np.empty((n - 1, 2))
     sigma_q = np.empty((n - 1, 2))
@@ -56,10 +67,11 @@ def chain_factors(
             sigma_q[k, 1] = prior_yaw_rate
             continue
         dt = t[k + 1] - t[k]
+        single_track_row(m, iz, lf, lr, cf, cr, max(abs(v_dyn[k]), v_min), A, B, C, D)
         for i in range(2):
             for j in range(2):
-                F[k, i, j] = dt * A[k, i, j] + (1.0 if i == j else 0.0)
-            g[k, i] = dt * B[k, i, 0] * delta[k]
+                F[k, i, j] = dt * A[i, j] + (1.0 if i == j else 0.0)
+            g[k, i] = dt * B[i, 0] * delta[k]
         scale = np.sqrt(dt / reference_dt)
         for i in range(2):
             sigma_q[k, i] = sigmas[i] * scale
@@ -69,9 +81,10 @@ def chain_factors(
     zu = np.zeros((n, 3))
     sigma_u = np.full((n, 3), np.inf)
     for k in range(n):
+        single_track_row(m, iz, lf, lr, cf, cr, max(abs(v_meas[k]), v_min), A, B, C, D)
         Hu[k, 0, 1] = 1.0
-        Hu[k, 1, 0] = C[k, 1, 0]
-        Hu[k, 1, 1] = C[k, 1, 1]
+        Hu[k, 1, 0] = C[1, 0]
+        Hu[k, 1, 1] = C[1, 1]
         Hu[k, 2, 0] = 1.0
         if np.isfinite(wz[k]):
             zu[k, 0] = wz[k]
@@ -79,7 +92,7 @@ def chain_factors(
         if low[k]:
             sigma_u[k, 2] = low_speed_beta
         elif np.isfinite(ay[k]):
-            zu[k, 1] = ay[k] - D[k, 1, 0] * delta[k]
+            zu[k, 1] = ay[k] - D[1, 0] * delta[k]
             sigma_u[k, 1] = sigmas[3]
     return F, g, sigma_q, Hu, zu, sigma_u
 

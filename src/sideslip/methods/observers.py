@@ -95,6 +95,7 @@ obs_modified.pole_rad_s=-15``), fixed by default for the reason given there.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numba
@@ -162,18 +163,23 @@ def _open_loop(x0: float, x1: float, A: NDArray, bu: NDArray, h: float
 
 @numba.njit(cache=True)
 def _run_bicycle_type(t: NDArray, Phi: NDArray, Gam: NDArray, w: NDArray, A: NDArray,
-                      bu: NDArray, fresh: NDArray, active: NDArray, x_init: NDArray
-                      ) -> NDArray:  # pragma: no cover - compiled
-    """x_{k+1} = Phi_k x_k + Gam_k w_k on fresh rows, open loop otherwise; reset when inactive."""
-    n = t.size
-    out = np.empty((n, 2))
-    x0, x1 = x_init[0, 0], x_init[0, 1]
+                      bu: NDArray, fresh: NDArray, active: NDArray, x_init: NDArray,
+                      x_start: NDArray, out: NDArray
+                      ) -> tuple[float, float]:  # pragma: no cover - compiled
+    """x_{k+1} = Phi_k x_k + Gam_k w_k on fresh rows, open loop otherwise; reset when inactive.
+
+    One chunk of n = ``Phi.shape[0]`` rows, from the state ``x_start`` at its first row, written
+    to ``out`` (n, 2).  ``t`` and ``x_init`` hold one row more (the next chunk's first) unless
+    the chunk ends the drive.  Returns the state at the next chunk's first row.
+    """
+    n = Phi.shape[0]
+    x0, x1 = x_start[0], x_start[1]
     for k in range(n):
         if not active[k]:
             x0, x1 = x_init[k, 0], x_init[k, 1]
         out[k, 0] = x0
         out[k, 1] = x1
-        if k == n - 1:
+        if k + 1 >= t.size:
             break
         h = t[k + 1] - t[k]
         if fresh[k]:
@@ -186,7 +192,7 @@ def _run_bicycle_type(t: NDArray, Phi: NDArray, Gam: NDArray, w: NDArray, A: NDA
             x0, x1 = x_init[k + 1, 0], x_init[k + 1, 1]
         x0 = min(max(x0, -BETA_MAX), BETA_MAX)
         x1 = min(max(x1, -R_MAX), R_MAX)
-    return out
+    return x0, x1
 
 
 @numba.njit(cache=True)
@@ -255,20 +261,36 @@ def _fresh(drive: Drive, *names: str) -> NDArray[np.bool_]:
     return ok
 
 
+# Rows per chunk of the per-row 2x2 matrices (A, B, K, Phi, Gamma: 32 B/row each): the
+# observers build them a chunk at a time, so their memory does not grow with them.
+CHUNK_ROWS = 1 << 14
+
+# (Phi, Gam, w, A, bu) of one chunk of rows
+ChunkMatrices = tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]
+
+
+def _chunks(n: int) -> list[slice]:
+    return [slice(s, min(n, s + CHUNK_ROWS)) for s in range(0, n, CHUNK_ROWS)]
+
+
 def run_bicycle_observer(inp: Inputs, vehicle: Vehicle, fresh: NDArray[np.bool_],
                          pole: float = P_BICYCLE, v_gate: float = V_GATE
                          ) -> tuple[FloatArray, FloatArray]:
     """Simple bicycle observer (eqs 12-17) on prepared inputs: returns (beta, r_hat)."""
-    v = np.maximum(np.abs(inp.vx), v_gate)
-    A, B, _, _ = continuous_arrays(vehicle, v)
-    b = B[:, :, 0]
     ref = COUPLING_FRACTION * (vehicle.cf * vehicle.lf + vehicle.cr * vehicle.lr) / vehicle.yaw_inertia
-    p_eff = reachable_pole(A, pole, ref)
-    K = single_output_gain(A, p_eff)
-    M = closed_loop(A, K, np.array([[0.0, 1.0]]))
-    Phi, Gam = double_pole_step(M, p_eff, _steps(inp.t))
-    w = b * inp.delta[:, None] + K * inp.r[:, None]
-    return _run(inp, vehicle, Phi, Gam, w, A, b * inp.delta[:, None], fresh, v_gate)
+
+    def matrices(sl: slice, dt: FloatArray) -> ChunkMatrices:
+        v = np.maximum(np.abs(inp.vx[sl]), v_gate)
+        A, B, _, _ = continuous_arrays(vehicle, v)
+        b = B[:, :, 0]
+        p_eff = reachable_pole(A, pole, ref)
+        K = single_output_gain(A, p_eff)
+        M = closed_loop(A, K, np.array([[0.0, 1.0]]))
+        Phi, Gam = double_pole_step(M, p_eff, dt)
+        bu = b * inp.delta[sl, None]
+        return Phi, Gam, b * inp.delta[sl, None] + K * inp.r[sl, None], A, bu
+
+    return _run(inp, vehicle, matrices, fresh, v_gate)
 
 
 def run_modified_observer(inp: Inputs, vehicle: Vehicle, ay: FloatArray, bank: FloatArray,
@@ -276,18 +298,21 @@ def run_modified_observer(inp: Inputs, vehicle: Vehicle, ay: FloatArray, bank: F
                           v_gate: float = V_GATE) -> tuple[FloatArray, FloatArray]:
     """Modified bicycle observer (eqs 33-39) with lateral acceleration ``ay`` (m/s^2) and the
     road ``bank`` (rad) as a known input (zeros: the paper's flat-road model)."""
-    v = np.maximum(np.abs(inp.vx), v_gate)
-    A, B, C, D = continuous_arrays(vehicle, v)
-    u = np.stack([inp.delta, np.sin(bank)], axis=1)
-    bu = np.einsum("nij,nj->ni", B, u)
-    du = np.einsum("nij,nj->ni", D, u)
     q = bicycle_coupling(vehicle.cf, vehicle.cr, vehicle.lf, vehicle.lr, vehicle.yaw_inertia)
-    K = two_output_gain(A, C, pole, q)
-    M = closed_loop(A, K, C)
-    Phi, Gam = double_pole_step(M, pole, _steps(inp.t))
-    y = np.stack([inp.r, ay], axis=1)
-    w = bu + np.einsum("nij,nj->ni", K, y - du)
-    return _run(inp, vehicle, Phi, Gam, w, A, bu, fresh, v_gate)
+
+    def matrices(sl: slice, dt: FloatArray) -> ChunkMatrices:
+        v = np.maximum(np.abs(inp.vx[sl]), v_gate)
+        A, B, C, D = continuous_arrays(vehicle, v)
+        u = np.stack([inp.delta[sl], np.sin(bank[sl])], axis=1)
+        bu = np.einsum("nij,nj->ni", B, u)
+        du = np.einsum("nij,nj->ni", D, u)
+        K = two_output_gain(A, C, pole, q)
+        M = closed_loop(A, K, C)
+        Phi, Gam = double_pole_step(M, pole, dt)
+        y = np.stack([inp.r[sl], ay[sl]], axis=1)
+        return Phi, Gam, bu + np.einsum("nij,nj->ni", K, y - du), A, bu
+
+    return _run(inp, vehicle, matrices, fresh, v_gate)
 
 
 def modified_output_error(inp: Inputs, vehicle: Vehicle, beta: FloatArray, r_hat: FloatArray,
@@ -295,20 +320,31 @@ def modified_output_error(inp: Inputs, vehicle: Vehicle, beta: FloatArray, r_hat
                           ) -> FloatArray:
     """a_y - (C_2 x_hat + D_2 u) (m/s^2): the modified observer's lateral-acceleration output
     error (eq 32 with the bank input), for its health check."""
-    v = np.maximum(np.abs(inp.vx), v_gate)
-    _, _, C, D = continuous_arrays(vehicle, v)
-    pred = C[:, 1, 0] * beta + C[:, 1, 1] * r_hat + D[:, 1, 0] * inp.delta + D[:, 1, 1] * np.sin(bank)
+    pred = np.empty(inp.vx.size)
+    for sl in _chunks(inp.vx.size):
+        _, _, C, D = continuous_arrays(vehicle, np.maximum(np.abs(inp.vx[sl]), v_gate))
+        pred[sl] = (C[:, 1, 0] * beta[sl] + C[:, 1, 1] * r_hat[sl] + D[:, 1, 0] * inp.delta[sl]
+                    + D[:, 1, 1] * np.sin(bank[sl]))
     return np.asarray(ay - pred, dtype=float)
 
 
-def _run(inp: Inputs, vehicle: Vehicle, Phi: FloatArray, Gam: FloatArray, w: FloatArray,
-         A: FloatArray, bu: FloatArray, fresh: NDArray[np.bool_], v_gate: float = V_GATE
-         ) -> tuple[FloatArray, FloatArray]:
+def _run(inp: Inputs, vehicle: Vehicle, matrices: Callable[[slice, FloatArray], ChunkMatrices],
+         fresh: NDArray[np.bool_], v_gate: float = V_GATE) -> tuple[FloatArray, FloatArray]:
+    """Run a bicycle-type observer chunk by chunk (:data:`CHUNK_ROWS`), the state carried from
+    one chunk to the next: ``matrices(rows, dt)`` gives that chunk's (Phi, Gam, w, A, bu)."""
+    n = inp.t.size
     active = inp.vx >= v_gate
     x_init = np.stack([kinematic_beta(inp.vx, inp.delta, vehicle), inp.r], axis=1)
-    x = _run_bicycle_type(inp.t, Phi, Gam, w, A, bu, fresh, active, x_init)
+    dt = _steps(inp.t)
+    x = np.empty((n, 2))
+    state = x_init[0].copy()
+    for sl in _chunks(n):
+        Phi, Gam, w, A, bu = matrices(sl, dt[sl])
+        ext = slice(sl.start, min(n, sl.stop + 1))
+        state = np.array(_run_bicycle_type(inp.t[ext], Phi, Gam, w, A, bu, fresh[sl], active[sl],
+                                           x_init[ext], state, x[sl]))
     beta = np.where(active, x[:, 0], x_init[:, 0])
-    return beta, x[:, 1]
+    return beta, x[:, 1].copy()
 
 
 def run_kinematic_observer(inp: Inputs, vehicle: Vehicle, ay: FloatArray,

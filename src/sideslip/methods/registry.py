@@ -219,12 +219,13 @@ def _with_input_health(method: Method, drive: Drive, est: Estimate) -> Estimate:
     own = est.series.get("health")
     if own is None and not h_in.any():
         return est
-    health = h_in if own is None else np.maximum(np.asarray(own, dtype=float), h_in)
+    flagged_share = float(np.count_nonzero(h_in > 0) / max(h_in.size, 1))
+    health = h_in if own is None else np.maximum(np.asarray(own, dtype=float), h_in, out=h_in)
     series = {**est.series, "health": health}
     params = dict(est.params)
     params["input_health"] = {
         "criterion": "inputs: dropouts of IMU/speed/steering, clock jumps, implausible wheel speeds",
-        "flagged_share": float(np.mean(h_in > 0)),
+        "flagged_share": flagged_share,
         "columns_checked": used,
     }
     return Estimate(est.method, est.t, series, params, est.innovations)

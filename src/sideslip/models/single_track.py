@@ -21,6 +21,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import expm
@@ -48,30 +49,52 @@ def continuous(vehicle: Vehicle, speed: float, v_min: float = V_MIN) -> SingleTr
     return SingleTrack(A[0], B[0], C[0], D[0], float(max(abs(speed), v_min)))
 
 
+@numba.njit(cache=True)
+def single_track_row(
+    m: float, iz: float, lf: float, lr: float, cf: float, cr: float, v: float,
+    A: NDArray, B: NDArray, C: NDArray, D: NDArray,
+) -> None:  # fmt: skip
+    """The model's matrices at one (already clamped) speed ``v`` into the 2x2 ``A``, ``B``,
+    ``C``, ``D`` (the one implementation: :func:`continuous_arrays` and compiled loops call it)."""
+    A[0, 0] = -(cf + cr) / (m * v)
+    A[0, 1] = (cr * lr - cf * lf) / (m * v**2) - 1.0
+    A[1, 0] = (cr * lr - cf * lf) / iz
+    A[1, 1] = -(cf * lf**2 + cr * lr**2) / (iz * v)
+    B[0, 0] = cf / (m * v)
+    B[0, 1] = -G / v
+    B[1, 0] = cf * lf / iz
+    B[1, 1] = 0.0
+    C[0, 0] = 0.0
+    C[0, 1] = 1.0
+    C[1, 0] = -(cf + cr) / m
+    C[1, 1] = (cr * lr - cf * lf) / (m * v)
+    D[0, 0] = 0.0
+    D[0, 1] = 0.0
+    D[1, 0] = cf / m
+    D[1, 1] = -G
+
+
+@numba.njit(cache=True)
+def _arrays(m: float, iz: float, lf: float, lr: float, cf: float, cr: float, v: NDArray) -> tuple:
+    n = v.size
+    A = np.empty((n, 2, 2))
+    B = np.empty((n, 2, 2))
+    C = np.empty((n, 2, 2))
+    D = np.empty((n, 2, 2))
+    for k in range(n):
+        single_track_row(m, iz, lf, lr, cf, cr, v[k], A[k], B[k], C[k], D[k])
+    return A, B, C, D
+
+
 def continuous_arrays(
     vehicle: Vehicle, speed: ArrayLike, v_min: float = V_MIN
 ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
     """Vectorised :func:`continuous`: arrays A, B, C, D of shape (N, 2, 2) for N speeds."""
-    v = np.maximum(np.abs(np.asarray(speed, dtype=float)), v_min)
-    m, iz, lf, lr = vehicle.mass, vehicle.yaw_inertia, vehicle.lf, vehicle.lr
-    cf, cr = vehicle.cf, vehicle.cr
-    n = v.size
-    A = np.empty((n, 2, 2))
-    A[:, 0, 0] = -(cf + cr) / (m * v)
-    A[:, 0, 1] = (cr * lr - cf * lf) / (m * v**2) - 1.0
-    A[:, 1, 0] = (cr * lr - cf * lf) / iz
-    A[:, 1, 1] = -(cf * lf**2 + cr * lr**2) / (iz * v)
-    B = np.zeros((n, 2, 2))
-    B[:, 0, 0] = cf / (m * v)
-    B[:, 0, 1] = -G / v
-    B[:, 1, 0] = cf * lf / iz
-    C = np.zeros((n, 2, 2))
-    C[:, 0, 1] = 1.0
-    C[:, 1, 0] = -(cf + cr) / m
-    C[:, 1, 1] = (cr * lr - cf * lf) / (m * v)
-    D = np.zeros((n, 2, 2))
-    D[:, 1, 0] = cf / m
-    D[:, 1, 1] = -G
+    v = np.ascontiguousarray(np.maximum(np.abs(np.asarray(speed, dtype=float)), v_min).ravel())
+    A, B, C, D = _arrays(
+        float(vehicle.mass), float(vehicle.yaw_inertia), float(vehicle.lf), float(vehicle.lr),
+        float(vehicle.cf), float(vehicle.cr), v,
+    )  # fmt: skip
     return A, B, C, D
 
 
