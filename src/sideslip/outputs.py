@@ -121,6 +121,18 @@ def _registered_temp(folder: str, prefix: str) -> tuple[int, str]:
     return fd, tmp
 
 
+def _drop_temp(tmp: str) -> None:
+    """Delete a temporary file and forget it, with signals held (a second signal during the
+    clean-up of the first would otherwise leave the file behind, unregistered)."""
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, _HELD_SIGNALS)
+    try:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        _LIVE_TEMPS.discard(tmp)
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+
+
 def atomic_write(path: PathLike, write: Writer) -> None:
     """Write ``path`` through ``write(tmp_path)`` so it is never half-written (module docstring).
 
@@ -155,11 +167,10 @@ def atomic_write(path: PathLike, write: Writer) -> None:
             os.unlink(tmp)
         raise InputError(name, f"cannot write ({exc.strerror or exc}): expected a writable path") from None
     except BaseException:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
+        _drop_temp(tmp)
         raise
     finally:
-        if not grouped:
+        if not grouped and not os.path.lexists(tmp):  # else remove_temps still knows it
             _LIVE_TEMPS.discard(tmp)
 
 

@@ -24,9 +24,14 @@ def test_chain_factors_equal_the_numpy_formulation():
     wz[100:200] = np.nan
     ay[300:350] = np.nan
     sig = np.array([1e-3, 1e-2, 1e-2, 0.5])
-    A, B, C, D = continuous_arrays(VEHICLE, np.maximum(speed, 3.0), v_min=3.0)
-    F, g, sq, Hu, zu, su = chain_factors(t, A, B, C, D, delta, low, gap, wz, ay, sig, 0.01, 10.0,
-                                         0.05, 0.05, 0.02)  # fmt: skip
+    # dynamics at a faster clamp than the a_y factor on the low-speed rows (as the graph does)
+    v_dyn = np.maximum(speed, 5.0)
+    A, B, _, _ = continuous_arrays(VEHICLE, v_dyn, v_min=3.0)
+    _, _, C, D = continuous_arrays(VEHICLE, speed, v_min=3.0)
+    model = np.array([VEHICLE.mass, VEHICLE.yaw_inertia, VEHICLE.lf, VEHICLE.lr, VEHICLE.cf,
+                      VEHICLE.cr, 3.0])  # fmt: skip
+    F, g, sq, Hu, zu, su = chain_factors(t, v_dyn, speed, model, delta, low, gap, wz, ay, sig,
+                                         0.01, 10.0, 0.05, 0.05, 0.02)  # fmt: skip
     # numpy: the same factors as whole-array operations
     dt = np.diff(t)
     F_ref = np.eye(2)[None] + dt[:, None, None] * A[:-1]
