@@ -528,7 +528,7 @@ def _estimate(
         cues.append("gnss_doppler")
     if has_pos:
         cues.append("gnss_position")
-    sd = np.sqrt(np.maximum(var, 0.0))
+    sd = np.sqrt(np.maximum(var[-1], 0.0))  # the last node's 1-sigma (no whole-drive copy)
     pick = (lambda a: float(np.median(a))) if smooth else (lambda a: float(a[-1]))
     geom, _, _ = axle_geometry(vehicle)
     params: dict[str, Any] = {
@@ -538,16 +538,16 @@ def _estimate(
         "wheel_speed_scale": pick(xs[:, ISW]),
         "wheel_speed_scale_factor": pick(xs[:, ISW]),  # the same (measured / true), older name
         "gyro_bias_rad_s": float(xs[-1, IBG]),
-        "gyro_bias_rad_s_sigma": float(sd[-1, IBG]),
+        "gyro_bias_rad_s_sigma": float(sd[IBG]),
         "gyro_scale": 1.0 / (1.0 - pick(xs[:, ISG])),
         "front_stiffness_scale": pick(xs[:, ISF]),
-        "front_stiffness_scale_sigma": float(sd[-1, ISF]),
+        "front_stiffness_scale_sigma": float(sd[ISF]),
         "rear_stiffness_scale": pick(xs[:, ISR]),
-        "rear_stiffness_scale_sigma": float(sd[-1, ISR]),
+        "rear_stiffness_scale_sigma": float(sd[ISR]),
         "slip_gain_k_s2_m": float(geom[0] / ((geom[0] + geom[1]) * geom[3] * pick(xs[:, ISR]))),
         "slip_gain_k_prior_s2_m": float(geom[0] / ((geom[0] + geom[1]) * geom[3])),
         "mu": pick(xs[:, IMU]),
-        "mu_sigma": float(np.median(sd[:, IMU])),
+        "mu_sigma": float(np.sqrt(max(np.median(var[:, IMU]), 0.0))),
         "roll_gain_rad_per_m_s2": k_phi,
         "gnss_updates_accepted": int(counts[0]),
         "gnss_updates_downweighted": int(counts[1]),
@@ -560,9 +560,9 @@ def _estimate(
         lever = np.array(vehicle.gnss_xyz, dtype=float)
         params.update(
             gnss_latency_s=pick(xs[:, ITAU]),
-            gnss_latency_s_sigma=float(sd[-1, ITAU]),
+            gnss_latency_s_sigma=float(sd[ITAU]),
             gnss_lever_arm_xy_m=[float(lever[0] + pick(xs[:, ILX])), float(lever[1] + pick(xs[:, ILY]))],
-            gnss_lever_arm_xy_m_sigma=[float(sd[-1, ILX]), float(sd[-1, ILY])],
+            gnss_lever_arm_xy_m_sigma=[float(sd[ILX]), float(sd[ILY])],
         )
     return Estimate("fused" if smooth else "fused_filter", t, series, params)
 
