@@ -448,25 +448,16 @@ def _propagate_causal(
     k_phi: float,
 ) -> dict[Any, FloatArray]:
     """Filter output on every row from the latest node at or before it: one Euler step of
-    the process model over the (< one node step) gap with the row's own IMU sample."""
-    rows = {k: v[j] for k, v in nodes.items()}
-    dt = t - tn[j]
-    c_y, c_x = aux[ICY][j], aux[ICX][j]
-    roll = np.arcsin(np.clip(c_y / G, -0.6, 0.6)) + k_phi * fy_lp
-    pitch = np.arcsin(np.clip(-c_x / G, -0.6, 0.6))
-    r = ((wz - rows[IBG]) * (1.0 - aux[ISG][j]) * np.cos(roll) + wy * np.sin(roll)) / np.cos(pitch)
-    del roll, pitch
-    vx, vy = rows[IVX], rows[IVY]
-    if IE in rows:  # position (with fixes), by the heading
-        psi = rows[IPSI]
-        c, s = np.cos(psi), np.sin(psi)
-        rows[IE] = rows[IE] + dt * (vx * c - vy * s)
-        rows[IN] = rows[IN] + dt * (vx * s + vy * c)
-        del c, s
-    if IPSI in rows:
-        rows[IPSI] = rows[IPSI] + dt * r
-    rows[IVX] = vx + dt * (ax - c_x + r * vy)
-    rows[IVY] = vy + dt * (ay * (1.0 - G * k_phi) - c_y - r * vx)
+    the process model over the (< one node step) gap with the row's own IMU sample, in one
+    compiled pass (:func:`sideslip.methods.fused_engine.propagate_rows`)."""
+    keys = list(nodes)
+    pos = {k: i for i, k in enumerate(keys)}
+    out = eng.propagate_rows(
+        t, tn, j, np.stack(list(nodes.values())), aux[ICY], aux[ICX], aux[ISG], wz, wy, ax, ay,
+        fy_lp, k_phi, pos[IVX], pos[IVY], pos[IBG], pos.get(IPSI, -1), pos.get(IE, -1),
+        pos.get(IN, -1),
+    )  # fmt: skip
+    rows = dict(zip(keys, out, strict=True))
     return rows
 
 

@@ -500,3 +500,41 @@ def row_outputs(
         pitch[i] = pt
         r[i] = ((wz[i] - bias_g[i]) * (1.0 - s_g) * math.cos(rl) + wy[i] * math.sin(rl)) / math.cos(pt)
     return beta, beta_std, r, roll, bank, pitch
+
+
+@numba.njit(cache=True)
+def propagate_rows(
+    t, tn, j, V, c_y, c_x, s_g, wz, wy, ax, ay, fy_lp, k_phi, i_vx, i_vy, i_bg, i_psi, i_e, i_n,
+):  # fmt: skip
+    """The causal filter's output on every row (``sideslip.methods.fused``): the node series
+    ``V`` (m, N) at the latest node ``j[i]`` at or before row i, then one Euler step of the
+    process model over the gap with the row's own IMU sample: v_x, v_y, yaw (row ``i_psi``)
+    and position (rows ``i_e``, ``i_n``; -1 where absent).  ``c_y``, ``c_x``, ``s_g``: node
+    series of the specific-force offsets and the gyro scale error.  Returns (m, rows)."""
+    m = V.shape[0]
+    n = t.size
+    out = np.empty((m, n))
+    for i in range(n):
+        a = j[i]
+        for c in range(m):
+            out[c, i] = V[c, a]
+        dt = t[i] - tn[a]
+        cy = c_y[a]
+        cx = c_x[a]
+        roll = math.asin(min(max(cy / G, -0.6), 0.6)) + k_phi * fy_lp[i]
+        pitch = math.asin(min(max(-cx / G, -0.6), 0.6))
+        w_z = (wz[i] - V[i_bg, a]) * (1.0 - s_g[a])
+        r = (w_z * math.cos(roll) + wy[i] * math.sin(roll)) / math.cos(pitch)
+        vx = V[i_vx, a]
+        vy = V[i_vy, a]
+        if i_e >= 0:  # position (with fixes), by the heading
+            psi = V[i_psi, a]
+            cs = math.cos(psi)
+            sn = math.sin(psi)
+            out[i_e, i] += dt * (vx * cs - vy * sn)
+            out[i_n, i] += dt * (vx * sn + vy * cs)
+        if i_psi >= 0:
+            out[i_psi, i] += dt * r
+        out[i_vx, i] = vx + dt * (ax[i] - cx + r * vy)
+        out[i_vy, i] = vy + dt * (ay[i] * (1.0 - G * k_phi) - cy - r * vx)
+    return out
