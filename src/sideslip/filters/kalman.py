@@ -35,9 +35,10 @@ Kernels:
 The Joseph form keeps P symmetric positive semi-definite under round-off, which matters when a
 filter runs for an hour at 100 Hz.  Scratch space: :func:`workspace` gives a buffer every
 update and predict kernel accepts; :func:`rts_workspace` the smoother's.  The kernels are
-compiled with the ``fastmath`` flags that let LLVM vectorise sums (re-association,
-contraction) but not those that assume away NaN or infinity, so a NaN measurement test or a
-non-positive innovation variance still behaves as written.
+compiled without ``fastmath``: with re-association or FMA contraction allowed, a kernel
+inlined into a freshly compiled caller and the same kernel loaded from numba's cache round
+differently, so two processes could give results differing in the last bit (measured: no
+speed gain from the flags on these 15-state kernels).
 """
 
 from __future__ import annotations
@@ -54,9 +55,6 @@ from sideslip.filters.diagnostics import (  # noqa: F401  (the names methods imp
     whiteness,
 )
 
-# re-association and contraction (FMA) only: no 'nnan'/'ninf', so NaN and inf stay IEEE
-FASTMATH = {"reassoc", "contract", "arcp", "nsz"}
-
 
 def workspace(n: int) -> NDArray:
     """A scratch buffer of shape (n + 5, n) that every predict/update kernel here accepts."""
@@ -71,7 +69,7 @@ def rts_workspace(n: int) -> NDArray:
 # ------------------------------------------------------------------------------------------
 # predict
 # ------------------------------------------------------------------------------------------
-@numba.njit(cache=True, fastmath=FASTMATH)
+@numba.njit(cache=True)
 def predict_ws_nb(
     x: NDArray, P: NDArray, F: NDArray, Q: NDArray, Gu: NDArray, work: NDArray
 ) -> None:
@@ -122,7 +120,7 @@ def nonzero_columns_nb(F: NDArray, rows: NDArray) -> None:
             rows[i, j] = -1
 
 
-@numba.njit(cache=True, fastmath=FASTMATH)
+@numba.njit(cache=True)
 def predict_rows_ws_nb(
     P: NDArray, F: NDArray, rows: NDArray, q: NDArray, Pn: NDArray, tmp: NDArray
 ) -> None:
@@ -175,7 +173,7 @@ def predict_sparse_nb(x: NDArray, P: NDArray, x_next: NDArray, F: NDArray, Q: ND
 # ------------------------------------------------------------------------------------------
 # measurement updates
 # ------------------------------------------------------------------------------------------
-@numba.njit(cache=True, fastmath=FASTMATH)
+@numba.njit(cache=True)
 def update_scalar_ws_nb(
     x: NDArray, P: NDArray, innov: float, h: NDArray, r: float, work: NDArray
 ) -> float:
@@ -220,7 +218,7 @@ def update_scalar_nb(x: NDArray, P: NDArray, innov: float, h: NDArray, r: float)
     return update_scalar_ws_nb(x, P, innov, h, r, np.zeros((2, x.size)))
 
 
-@numba.njit(cache=True, fastmath=FASTMATH)
+@numba.njit(cache=True)
 def innovation_variance_nb(P: NDArray, h: NDArray, r: float) -> float:
     """``S = h P h' + r``, skipping the zero entries of ``h``."""
     n = h.size
@@ -294,7 +292,7 @@ def update_robust_scalar_nb(
     )
 
 
-@numba.njit(cache=True, fastmath=FASTMATH)
+@numba.njit(cache=True)
 def update_robust_pair_ws_nb(
     x: NDArray, P: NDArray, H: NDArray, y0: float, y1: float, r: float, inflate_nis: float,
     work: NDArray,
@@ -371,7 +369,7 @@ def update_vector_nb(x: NDArray, P: NDArray, innov: NDArray, H: NDArray, R: NDAr
 # ------------------------------------------------------------------------------------------
 # linear algebra, storage
 # ------------------------------------------------------------------------------------------
-@numba.njit(cache=True, fastmath=FASTMATH)
+@numba.njit(cache=True)
 def cholesky_ws_nb(A: NDArray, L: NDArray) -> None:
     """Lower-triangular ``L`` with L L' = A for a small symmetric positive-definite A
     (Cholesky-Banachiewicz), in place of ``L``.  A non-positive pivot (A not positive
@@ -400,7 +398,7 @@ def cholesky_nb(A: NDArray) -> NDArray:
     return L
 
 
-@numba.njit(cache=True, fastmath=FASTMATH)
+@numba.njit(cache=True)
 def cho_solve_rows_ws_nb(L: NDArray, B: NDArray) -> None:
     """Solve ``(L L') X = B`` for every column of ``B`` at once, in place of ``B``; a zero
     pivot (semi-definite factor) gives a zero row.  Row-oriented: the inner loops run along
@@ -456,7 +454,7 @@ def unpack_upper_nb(packed: NDArray, P: NDArray) -> None:
 # ------------------------------------------------------------------------------------------
 # Rauch-Tung-Striebel smoother
 # ------------------------------------------------------------------------------------------
-@numba.njit(cache=True, fastmath=FASTMATH)
+@numba.njit(cache=True)
 def rts_gain_ws_nb(P: NDArray, Pn: NDArray, F: NDArray, rows: NDArray, B: NDArray, L: NDArray) -> None:
     """The transposed RTS gain ``B = C' = Pn^-1 F P`` of the step from the filtered ``P`` at k
     to its prediction ``Pn`` at k+1 (Jacobian ``F``, non-zero columns per row in ``rows`` as
@@ -479,7 +477,7 @@ def rts_gain_ws_nb(P: NDArray, Pn: NDArray, F: NDArray, rows: NDArray, B: NDArra
     cho_solve_rows_ws_nb(L, B)
 
 
-@numba.njit(cache=True, fastmath=FASTMATH)
+@numba.njit(cache=True)
 def rts_update_ws_nb(
     x: NDArray, P: NDArray, xn: NDArray, Pn: NDArray, B: NDArray, xs_next: NDArray,
     Ps_next: NDArray, T: NDArray,
