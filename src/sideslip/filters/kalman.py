@@ -121,6 +121,24 @@ def nonzero_columns_nb(F: NDArray, rows: NDArray) -> None:
 
 
 @numba.njit(cache=True)
+def sparse_times_ws_nb(F: NDArray, rows: NDArray, P: NDArray, out: NDArray) -> None:
+    """``out = F P`` using only the non-zero columns of each row of F (``rows[i]`` lists
+    them, -1 pads)."""
+    n = P.shape[0]
+    w = rows.shape[1]
+    for i in range(n):
+        for j in range(n):
+            out[i, j] = 0.0
+        for m in range(w):
+            col = rows[i, m]
+            if col < 0:
+                break
+            f = F[i, col]
+            for j in range(n):
+                out[i, j] += f * P[col, j]
+
+
+@numba.njit(cache=True)
 def predict_rows_ws_nb(
     P: NDArray, F: NDArray, rows: NDArray, q: NDArray, Pn: NDArray, tmp: NDArray
 ) -> None:
@@ -128,16 +146,7 @@ def predict_rows_ws_nb(
     lists them, -1 pads); ``tmp`` (n, n) scratch.  The caller sets ``x- = f(x, u, dt)``."""
     n = P.shape[0]
     w = rows.shape[1]
-    for i in range(n):  # tmp = F P
-        for j in range(n):
-            tmp[i, j] = 0.0
-        for m in range(w):
-            col = rows[i, m]
-            if col < 0:
-                break
-            f = F[i, col]
-            for j in range(n):
-                tmp[i, j] += f * P[col, j]
+    sparse_times_ws_nb(F, rows, P, tmp)  # tmp = F P
     for j in range(n):  # Pn = tmp F' (symmetric: computed for i <= j, mirrored)
         for i in range(j + 1):
             acc = 0.0
@@ -461,19 +470,8 @@ def rts_gain_ws_nb(P: NDArray, Pn: NDArray, F: NDArray, rows: NDArray, B: NDArra
     :func:`predict_rows_ws_nb`), from the Cholesky factor of Pn (``L`` scratch; no inverse).
     It depends on the forward pass only, so a smoother may compute it ahead of the backward
     recursion (:func:`rts_update_ws_nb`)."""
-    n = P.shape[0]
-    w = rows.shape[1]
     cholesky_ws_nb(Pn, L)
-    for i in range(n):  # B = F P
-        for j in range(n):
-            B[i, j] = 0.0
-        for m in range(w):
-            col = rows[i, m]
-            if col < 0:
-                break
-            f = F[i, col]
-            for j in range(n):
-                B[i, j] += f * P[col, j]
+    sparse_times_ws_nb(F, rows, P, B)  # B = F P
     cho_solve_rows_ws_nb(L, B)
 
 
