@@ -9,7 +9,7 @@ window and model-error terms 0), so that two trees can be compared on the same d
     PYTHONPATH=OLD/src  python benchmarks/speed_before_after.py DRIVE.parquet M1,M2 --tag before
     PYTHONPATH=NEW/src  python benchmarks/speed_before_after.py DRIVE.parquet M1,M2 --untuned
 
-Prints one JSON object {method: best-of-3 CPU seconds}.  The drive is the bench's cached
+Prints one JSON object {method: best-of-N CPU seconds} (N = ``--repeat``, default 3).  The drive is the bench's cached
 ``endurance_1h.parquet`` (``sideslip bench`` writes it).
 """
 
@@ -46,6 +46,7 @@ def main() -> None:
     ap.add_argument("drive")
     ap.add_argument("methods", help="comma-separated method names")
     ap.add_argument("--untuned", action="store_true")
+    ap.add_argument("--repeat", type=int, default=3, help="timed calls per method (best is kept); default 3")
     args = ap.parse_args()
     drive = load_drive(args.drive)
     vehicle = load_vehicle(drive.meta["vehicle"])
@@ -59,7 +60,7 @@ def main() -> None:
 
         call(drive.slice(0, 6000))  # compile and warm the caches
         best = float("inf")
-        for _ in range(3):
+        for _ in range(args.repeat):
             start = time.process_time()
             call(drive)
             best = min(best, time.process_time() - start)

@@ -11,7 +11,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from sideslip.filters.kalman import predict_sparse_nb, update_scalar_nb
+from sideslip.filters.kalman import nonzero_columns_nb, predict_rows_ws_nb, update_scalar_ws_nb
 from sideslip.gnss import gauss_markov_nb
 from sideslip.models.kinematic import kinematic_beta, lever_arm_enu
 from sideslip.models.kinematic_ekf import (
@@ -23,7 +23,6 @@ from sideslip.models.kinematic_ekf import (
     GN,
     KD,
     KU,
-    NO_INPUT,
     NX,
     PSI,
     SW,
@@ -31,13 +30,13 @@ from sideslip.models.kinematic_ekf import (
     N,
     R,
     V,
-    gnss_model,
-    gyro_model,
+    gnss_model_into,
+    gyro_model_into,
     steer_corrected,
     steer_denominator,
-    steer_model,
-    transition,
-    wheel_model,
+    steer_model_into,
+    transition_into,
+    wheel_model_into,
 )
 
 FloatArray = NDArray[np.float64]
@@ -138,15 +137,56 @@ def process_noise(
     Q[N, E] = Q[E, N]
 
 
+class Workspace(NamedTuple):
+    """Scratch arrays of one run of :func:`ekf_loop`, allocated once instead of on every row:
+    the process noise ``Q``, the non-zero columns of F (``rows``), the predicted covariance
+    ``Pn``, the product F P (``tmp``), a zero diagonal (``q0``), the two rows of a scalar
+    update (``work``: P h' and the gain), the predicted state ``xn`` and Jacobian ``F``, and
+    the measurement Jacobian rows (``h`` for the wheel, steering and gyro updates, ``he``,
+    ``hn`` for GNSS)."""
+
+    Q: FloatArray
+    rows: NDArray[np.int64]
+    Pn: FloatArray
+    tmp: FloatArray
+    q0: FloatArray
+    work: FloatArray
+    xn: FloatArray
+    F: FloatArray
+    h: FloatArray
+    he: FloatArray
+    hn: FloatArray
+
+
 @numba.njit(cache=True)
-def _predict(x: FloatArray, P: FloatArray, Q: FloatArray, dt: float, c: LoopConsts) -> None:
-    """Propagate x and P over dt with the process model and its sparse Jacobian."""
+def workspace() -> Workspace:
+    """A fresh :class:`Workspace` for the 14-state filter."""
+    return Workspace(np.zeros((NX, NX)), np.empty((NX, NX), dtype=np.int64), np.empty((NX, NX)),
+                     np.empty((NX, NX)), np.zeros(NX), np.zeros((2, NX)), np.empty(NX),
+                     np.empty((NX, NX)), np.zeros(NX), np.zeros(NX), np.zeros(NX))
+
+
+@numba.njit(cache=True)
+def _predict(x: FloatArray, P: FloatArray, dt: float, c: LoopConsts, ws: Workspace) -> None:
+    """Propagate x and P over dt with the process model and its sparse Jacobian:
+    P <- F P F' + (Q + Q')/2 by its non-zero entries (the steps of
+    :func:`sideslip.filters.kalman.predict_sparse_nb`, in the caller's workspace)."""
     tu = c.tuning
     a_gm, q_gm = gauss_markov_nb(dt, tu.gnss_tau_s, c.gnss_gm_std)
     a_road, q_road = gauss_markov_nb(dt, tu.road_tau_s, c.road_std)
+    Q = ws.Q
     process_noise(Q, x, dt, c, q_gm, q_road)  # at the step's start state, as the Euler step
-    xn, F = transition(x, NO_INPUT, dt, c.lr, a_gm, a_road)
-    predict_sparse_nb(x, P, xn, F, Q)
+    xn, F = ws.xn, ws.F
+    transition_into(x, dt, c.lr, a_gm, a_road, xn, F)
+    nonzero_columns_nb(F, ws.rows)
+    Pn = ws.Pn
+    predict_rows_ws_nb(P, F, ws.rows, ws.q0, Pn, ws.tmp)
+    for i in range(NX):
+        x[i] = xn[i]
+        for j in range(i, NX):
+            v = Pn[i, j] + 0.5 * (Q[i, j] + Q[j, i])
+            P[i, j] = v
+            P[j, i] = v
 
 
 @numba.njit(cache=True)
@@ -178,7 +218,7 @@ def ekf_loop(
     nis_gnss = np.full(n_rows, np.nan)
     x = x0.copy()
     P = P0.copy()
-    Q = np.zeros((NX, NX))
+    ws = workspace()
     L = c.wheelbase
     tr = c.track_rear
     lf = L - c.lr
@@ -196,7 +236,7 @@ def ekf_loop(
         if k > 0:
             dt = t[k] - t[k - 1]
             stretch_dist += abs(x[V]) * dt
-            _predict(x, P, Q, dt, c)
+            _predict(x, P, dt, c, ws)
         # --- direction of travel when the wheel sensors report magnitudes only --------------
         if c.wheels_unsigned and math.isfinite(v_rl[k]) and math.isfinite(v_rr[k]):
             if v_rl[k] == 0.0 and v_rr[k] == 0.0:
@@ -210,11 +250,12 @@ def ekf_loop(
             if not math.isfinite(z):
                 continue
             z = direction * z
-            pred, h = wheel_model(x, side, tr)
+            h = ws.h
+            pred = wheel_model_into(x, side, tr, h)
             rv = tu.wheel_sigma_m_s**2 + (tu.wheel_sigma_rel * pred) ** 2
             if z == 0.0:
                 rv += tu.wheel_zero_band_m_s**2  # the sensor reads 0 anywhere below a few pulses
-            update_scalar_nb(x, P, z - pred, h, rv)
+            update_scalar_ws_nb(x, P, z - pred, h, rv, ws.work)
         # --- steering: eq 2.2 as a yaw-rate pseudo-measurement ------------------------------
         if math.isfinite(steer[k]):
             delta_m = steer[k]
@@ -223,17 +264,19 @@ def ekf_loop(
             dc = steer_corrected(delta_m, x[KD], x[BD]) - x[BR]
             v = x[V]
             den = steer_denominator(v, x[KU], L)
-            pred, h = steer_model(x, delta_m, L)
+            h = ws.h
+            pred = steer_model_into(x, delta_m, L, h)
             sec2 = 1.0 + math.tan(dc) ** 2
             r_s = v * math.tan(dc) / den
             rv = (v * sec2 * tu.steer_sigma_rad / (k1 * den)) ** 2 + tu.steer_yaw_rate_sigma_rad_s**2
             rv += (tu.steer_yaw_rate_sigma_rel * r_s) ** 2  # tyre nonlinearity, yaw transients
-            s = update_scalar_nb(x, P, 0.0 - pred, h, rv)
+            s = update_scalar_ws_nb(x, P, 0.0 - pred, h, rv, ws.work)
             nis_steer[k] = pred * pred / s if s > 0.0 else math.nan
         # --- gyro ---------------------------------------------------------------------------
         if c.use_gyro and math.isfinite(wz[k]):
-            pred, h = gyro_model(x)
-            s = update_scalar_nb(x, P, wz[k] - pred, h, tu.gyro_sigma_rad_s**2)
+            h = ws.h
+            pred = gyro_model_into(x, h)
+            s = update_scalar_ws_nb(x, P, wz[k] - pred, h, tu.gyro_sigma_rad_s**2, ws.work)
             nis_gyro[k] = (wz[k] - pred) ** 2 / s if s > 0.0 else math.nan
         # --- GNSS position, gated -----------------------------------------------------------
         if math.isfinite(gnss_e[k]) and math.isfinite(gnss_n[k]):
@@ -241,7 +284,8 @@ def ekf_loop(
             if not sw > 0.0:
                 sw = c.gnss_white_default
             rv = sw * sw + (c.ant_z * tu.gnss_roll_sigma_rad) ** 2
-            pred_e, pred_n, he, hn = gnss_model(x, c.ant_x, c.ant_y)
+            he, hn = ws.he, ws.hn
+            pred_e, pred_n = gnss_model_into(x, c.ant_x, c.ant_y, he, hn)
             if c.wheels_unsigned and not decided:
                 # antenna displacement since the stretch began, along the heading of then
                 ae, an = lever_arm_enu(x[PSI], c.ant_x, c.ant_y)
@@ -265,7 +309,7 @@ def ekf_loop(
                         P[E, E] += moved2
                         P[N, N] += moved2
                         P[PSI, PSI] += turned * turned
-                    pred_e, pred_n, he, hn = gnss_model(x, c.ant_x, c.ant_y)
+                    pred_e, pred_n = gnss_model_into(x, c.ant_x, c.ant_y, he, hn)
             nu_e = gnss_e[k] - pred_e
             nu_n = gnss_n[k] - pred_n
             pe = P @ he
@@ -289,9 +333,9 @@ def ekf_loop(
                 rejects += 1
             nis_gnss[k] = nis
             if flags[k] != GNSS_REJECTED:
-                update_scalar_nb(x, P, nu_e, he, rv)
-                pred_e, pred_n, he, hn = gnss_model(x, c.ant_x, c.ant_y)
-                update_scalar_nb(x, P, gnss_n[k] - pred_n, hn, rv)
+                update_scalar_ws_nb(x, P, nu_e, he, rv, ws.work)
+                pred_e, pred_n = gnss_model_into(x, c.ant_x, c.ant_y, he, hn)
+                update_scalar_ws_nb(x, P, gnss_n[k] - pred_n, hn, rv, ws.work)
         # --- store --------------------------------------------------------------------------
         for j in range(n_kept):
             xs[k, j] = x[ROW_STATES[j]]

@@ -18,6 +18,7 @@ as the integral of DRIFT_AY / v_x since the last reset; health is that over ``HE
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numba
@@ -28,7 +29,7 @@ from sideslip.drive import Drive
 from sideslip.estimate import Estimate
 from sideslip.methods.observer_health import stale_health
 from sideslip.methods.registry import SPEED, register
-from sideslip.signals import hold, vehicle_speed
+from sideslip.signals import vehicle_speed
 from sideslip.vehicle import Vehicle
 
 V_GATE = 3.0  # m/s: below this, beta is reset to zero
@@ -48,30 +49,61 @@ class KinematicIntegrationSettings:
                              "expected 0.5 ... 30 m/s")
 
 
+@numba.njit(cache=True)
+def _drift_health_nb(t: NDArray, vx: NDArray, v_gate: float) -> NDArray:  # pragma: no cover
+    """:func:`drift_health` in one pass: the drift integral restarts at every row below the
+    gate (its running sum minus the sum at the latest reset row)."""
+    n = t.size
+    health = np.empty(n)
+    c = 0.0
+    c_reset = 0.0
+    for k in range(n):
+        dt = t[k] - t[k - 1] if k > 0 else 0.0
+        rate = DRIFT_AY / max(vx[k], v_gate) if vx[k] >= v_gate else 0.0
+        c += rate * dt
+        if vx[k] < v_gate:
+            c_reset = c
+        h = (c - c_reset) / HEALTH_FULL_RAD
+        health[k] = 1.0 if vx[k] <= -0.1 else min(max(h, 0.0), 1.0)
+    return health
+
+
 def drift_health(t: NDArray, vx: NDArray, v_gate: float) -> NDArray:
     """Per-row health of the module docstring (integral of DRIFT_AY / v_x since the reset)."""
-    dt = np.diff(t, prepend=t[0])
-    rate = np.where(vx >= v_gate, DRIFT_AY / np.maximum(vx, v_gate), 0.0) * dt
-    c = np.cumsum(rate)
-    reset = np.where(vx < v_gate, np.arange(t.size), -1)
-    np.maximum.accumulate(reset, out=reset)
-    drift = c - np.where(reset >= 0, c[np.maximum(reset, 0)], 0.0)
-    health = np.clip(drift / HEALTH_FULL_RAD, 0.0, 1.0)
-    return np.asarray(np.where(vx <= -0.1, 1.0, health), dtype=float)
+    return np.asarray(_drift_health_nb(np.asarray(t, dtype=float), np.asarray(vx, dtype=float),
+                                       float(v_gate)))
 
 
 @numba.njit(cache=True)
-def _integrate(t: NDArray, ay: NDArray, r: NDArray, vx: NDArray, v_gate: float) -> NDArray:
-    beta = np.zeros(t.size)
-    for k in range(1, t.size):
-        dt = t[k] - t[k - 1]
-        v = vx[k - 1]
-        if v < v_gate:
-            beta[k] = 0.0
-        else:
-            b = beta[k - 1] + dt * (ay[k - 1] / v - r[k - 1])
-            beta[k] = min(max(b, -1.5), 1.5)
-    return beta
+def _integrate(t: NDArray, ay_m: NDArray, wz: NDArray, vx: NDArray, v_gate: float
+               ) -> tuple[NDArray, NDArray, NDArray]:  # pragma: no cover - compiled
+    """beta' = a_y / v_x - r by Euler steps from zero, reset below ``v_gate``, on the
+    zero-order holds of ``ay_m`` and ``wz`` (0 before their first sample, as
+    :func:`sideslip.signals.hold`).  Returns (beta, held r, rows with both IMU samples)."""
+    n = t.size
+    beta = np.zeros(n)
+    r = np.empty(n)
+    imu = np.empty(n, dtype=np.bool_)
+    ay_k = 0.0
+    r_k = 0.0
+    for k in range(n):
+        if k > 0:
+            dt = t[k] - t[k - 1]
+            v = vx[k - 1]
+            if v < v_gate:
+                beta[k] = 0.0
+            else:
+                b = beta[k - 1] + dt * (ay_k / v - r_k)
+                beta[k] = min(max(b, -1.5), 1.5)
+        ay_fresh = math.isfinite(ay_m[k])
+        r_fresh = math.isfinite(wz[k])
+        if ay_fresh:
+            ay_k = ay_m[k]
+        if r_fresh:
+            r_k = wz[k]
+        r[k] = r_k
+        imu[k] = ay_fresh and r_fresh
+    return beta, r, imu
 
 
 @register(
@@ -85,13 +117,10 @@ def kinematic_integration(drive: Drive, vehicle: Vehicle,
                           settings: KinematicIntegrationSettings | None = None) -> Estimate:
     """Sideslip by integrating beta' = a_y/v_x - r from zero; see module docstring."""
     st = settings or KinematicIntegrationSettings()
-    ay, _ = hold(drive["ay"], drive.t)
-    r, _ = hold(drive["wz"], drive.t)
     vx = vehicle_speed(drive)
-    beta = _integrate(drive.t, ay, r, vx, st.v_gate_m_s)
+    beta, r, imu = _integrate(drive.t, drive["ay"], drive["wz"], vx, st.v_gate_m_s)
     health = drift_health(drive.t, vx, st.v_gate_m_s)
-    imu = np.isfinite(drive["ay"]) & np.isfinite(drive["wz"])
-    health = np.maximum(health, stale_health(drive.t, imu))  # held samples in a sensor gap
+    np.maximum(health, stale_health(drive.t, imu), out=health)  # held samples in a sensor gap
     return Estimate(
         "kinematic_integration",
         drive.t,

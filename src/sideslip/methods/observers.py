@@ -116,7 +116,8 @@ from sideslip.methods.observer_health import observer_health
 from sideslip.methods.registry import SPEED, register
 from sideslip.methods.roll_index import ROLL_PARAMS, Inputs, estimate_roll_index, sensor_inputs
 from sideslip.models.roll import compensate_ay
-from sideslip.models.single_track import continuous_arrays
+from sideslip.models.single_track import V_MIN as SINGLE_TRACK_V_MIN
+from sideslip.models.single_track import continuous_arrays, single_track_row
 from sideslip.vehicle import Vehicle
 
 FloatArray = NDArray[np.float64]
@@ -315,17 +316,35 @@ def run_modified_observer(inp: Inputs, vehicle: Vehicle, ay: FloatArray, bank: F
     return _run(inp, vehicle, matrices, fresh, v_gate)
 
 
+@numba.njit(cache=True)
+def _ay_output_error(m: float, iz: float, lf: float, lr: float, cf: float, cr: float,
+                     v: NDArray, beta: NDArray, r_hat: NDArray, delta: NDArray,
+                     sin_bank: NDArray, ay: NDArray) -> NDArray:  # pragma: no cover - compiled
+    """a_y - (C_2 x + D_2 u) per row, the model rows of
+    :func:`sideslip.models.single_track.single_track_row` at the speeds ``v`` (m/s)."""
+    A = np.empty((2, 2))
+    B = np.empty((2, 2))
+    C = np.empty((2, 2))
+    D = np.empty((2, 2))
+    out = np.empty(v.size)
+    for k in range(v.size):
+        single_track_row(m, iz, lf, lr, cf, cr, v[k], A, B, C, D)
+        pred = C[1, 0] * beta[k] + C[1, 1] * r_hat[k] + D[1, 0] * delta[k] + D[1, 1] * sin_bank[k]
+        out[k] = ay[k] - pred
+    return out
+
+
 def modified_output_error(inp: Inputs, vehicle: Vehicle, beta: FloatArray, r_hat: FloatArray,
                           ay: FloatArray, bank: FloatArray, v_gate: float = V_GATE
                           ) -> FloatArray:
     """a_y - (C_2 x_hat + D_2 u) (m/s^2): the modified observer's lateral-acceleration output
-    error (eq 32 with the bank input), for its health check."""
-    pred = np.empty(inp.vx.size)
-    for sl in _chunks(inp.vx.size):
-        _, _, C, D = continuous_arrays(vehicle, np.maximum(np.abs(inp.vx[sl]), v_gate))
-        pred[sl] = (C[:, 1, 0] * beta[sl] + C[:, 1, 1] * r_hat[sl] + D[:, 1, 0] * inp.delta[sl]
-                    + D[:, 1, 1] * np.sin(bank[sl]))
-    return np.asarray(ay - pred, dtype=float)
+    error (eq 32 with the bank input), for its health check; one compiled pass over the rows
+    (the model speed clamped as :func:`~sideslip.models.single_track.continuous_arrays` does)."""
+    v = np.maximum(np.maximum(np.abs(inp.vx), v_gate), SINGLE_TRACK_V_MIN)
+    return np.asarray(_ay_output_error(
+        float(vehicle.mass), float(vehicle.yaw_inertia), float(vehicle.lf), float(vehicle.lr),
+        float(vehicle.cf), float(vehicle.cr), v, np.asarray(beta, dtype=float),
+        np.asarray(r_hat, dtype=float), inp.delta, np.sin(bank), np.asarray(ay, dtype=float)))
 
 
 def _run(inp: Inputs, vehicle: Vehicle, matrices: Callable[[slice, FloatArray], ChunkMatrices],

@@ -54,16 +54,10 @@ NO_INPUT = np.zeros(0)  # the process model has no input: speed and yaw rate are
 
 
 @numba.njit(cache=True)
-def transition(
-    x: FloatArray, u: FloatArray, dt: float, lr: float, phi_gnss: float, phi_road: float
-) -> tuple[FloatArray, FloatArray]:
-    """One Euler step of the process model: ``(x_next, F)`` with the 14 x 14 Jacobian F.
-
-    ``u``: no input (pass :data:`NO_INPUT`); ``lr`` (m) CG to rear axle; ``phi_gnss``,
-    ``phi_road``: the Gauss-Markov factors exp(-dt/tau) of the GNSS error and the road
-    steering offset (:func:`sideslip.gnss.gauss_markov`).  The heading of the step is its
-    mid-point psi + r dt / 2.
-    """
+def transition_into(x: FloatArray, dt: float, lr: float, phi_gnss: float, phi_road: float,
+                    xn: FloatArray, F: FloatArray) -> None:
+    """:func:`transition` writing ``x_next`` into ``xn`` (NX) and F into ``F`` (NX x NX)
+    instead of allocating them (the filter loop calls it on every row)."""
     psi_m = x[PSI] + 0.5 * dt * x[R]
     cs = math.cos(psi_m)
     sn = math.sin(psi_m)
@@ -71,14 +65,16 @@ def transition(
     r = x[R]
     vx, vy = cg_velocity(v, r, lr)  # eq 2.4
     de, dn = enu_rate(vx, vy, psi_m)  # eq 2.1
-    xn = x.copy()
+    for i in range(NX):
+        xn[i] = x[i]
+        for j in range(NX):
+            F[i, j] = 1.0 if i == j else 0.0
     xn[E] += dt * de
     xn[N] += dt * dn
     xn[PSI] += dt * r
     xn[GE] *= phi_gnss
     xn[GN] *= phi_gnss
     xn[BR] *= phi_road
-    F = np.eye(NX)
     F[E, PSI] = dt * (-v * sn - lr * r * cs)
     F[E, V] = dt * cs
     F[E, R] = dt * (-lr * sn - 0.5 * dt * (v * sn + lr * r * cs))
@@ -89,7 +85,37 @@ def transition(
     F[GE, GE] = phi_gnss
     F[GN, GN] = phi_gnss
     F[BR, BR] = phi_road
+
+
+@numba.njit(cache=True)
+def transition(
+    x: FloatArray, u: FloatArray, dt: float, lr: float, phi_gnss: float, phi_road: float
+) -> tuple[FloatArray, FloatArray]:
+    """One Euler step of the process model: ``(x_next, F)`` with the 14 x 14 Jacobian F.
+
+    ``u``: no input (pass :data:`NO_INPUT`); ``lr`` (m) CG to rear axle; ``phi_gnss``,
+    ``phi_road``: the Gauss-Markov factors exp(-dt/tau) of the GNSS error and the road
+    steering offset (:func:`sideslip.gnss.gauss_markov`).  The heading of the step is its
+    mid-point psi + r dt / 2.
+    """
+    xn = np.empty(NX)
+    F = np.empty((NX, NX))
+    transition_into(x, dt, lr, phi_gnss, phi_road, xn, F)
     return xn, F
+
+
+@numba.njit(cache=True)
+def wheel_model_into(x: FloatArray, side: int, track_rear: float, h: FloatArray) -> float:
+    """:func:`wheel_model` writing the Jacobian row into ``h`` (NX); returns the prediction."""
+    sgn = -1.0 if side == 0 else 1.0
+    g = 1.0 + x[SW] + sgn * x[DW]
+    u = x[V] + sgn * 0.5 * track_rear * x[R]
+    h[:] = 0.0
+    h[V] = g
+    h[R] = sgn * 0.5 * track_rear * g
+    h[SW] = u
+    h[DW] = sgn * u
+    return g * u
 
 
 @numba.njit(cache=True)
@@ -98,15 +124,8 @@ def wheel_model(x: FloatArray, side: int, track_rear: float) -> tuple[float, Flo
 
     v_RL = (1 + s_w - d_w)(v - r T_r/2),  v_RR = (1 + s_w + d_w)(v + r T_r/2).
     """
-    sgn = -1.0 if side == 0 else 1.0
-    g = 1.0 + x[SW] + sgn * x[DW]
-    u = x[V] + sgn * 0.5 * track_rear * x[R]
     h = np.zeros(NX)
-    h[V] = g
-    h[R] = sgn * 0.5 * track_rear * g
-    h[SW] = u
-    h[DW] = sgn * u
-    return g * u, h
+    return wheel_model_into(x, side, track_rear, h), h
 
 
 @numba.njit(cache=True)
@@ -123,13 +142,8 @@ def steer_denominator(v: float, kus: float, wheelbase: float) -> float:
 
 
 @numba.njit(cache=True)
-def steer_model(x: FloatArray, delta_m: float, wheelbase: float) -> tuple[float, FloatArray]:
-    """Residual h = r - v tan(delta_c - b_r) / (L + K_us v^2) (measured as 0), Jacobian row.
-
-    Eq 2.2 (K_us = 0, b_r = 0) extended by the understeer gradient and the road-induced
-    steering offset b_r = K_us g sin(bank) (the steering a driver holds to go straight on a
-    banked or crowned road), so that the steering calibration is not biased by tyre slip.
-    """
+def steer_model_into(x: FloatArray, delta_m: float, wheelbase: float, h: FloatArray) -> float:
+    """:func:`steer_model` writing the Jacobian row into ``h`` (NX); returns the residual."""
     k1 = 1.0 + x[KD]
     d_sensor = steer_corrected(delta_m, x[KD], x[BD])
     dc = d_sensor - x[BR]
@@ -139,7 +153,7 @@ def steer_model(x: FloatArray, delta_m: float, wheelbase: float) -> tuple[float,
     kv2 = x[KU] * v * v
     den = steer_denominator(v, x[KU], wheelbase)
     clamped = wheelbase + kv2 < 0.5 * wheelbase
-    h = np.zeros(NX)
+    h[:] = 0.0
     h[R] = 1.0
     if clamped:
         h[V] = -tn / den
@@ -149,16 +163,51 @@ def steer_model(x: FloatArray, delta_m: float, wheelbase: float) -> tuple[float,
     h[KD] = v * sec2 * d_sensor / (k1 * den)
     h[BD] = v * sec2 / (k1 * den)
     h[BR] = v * sec2 / den
-    return x[R] - v * tn / den, h
+    return x[R] - v * tn / den
+
+
+@numba.njit(cache=True)
+def steer_model(x: FloatArray, delta_m: float, wheelbase: float) -> tuple[float, FloatArray]:
+    """Residual h = r - v tan(delta_c - b_r) / (L + K_us v^2) (measured as 0), Jacobian row.
+
+    Eq 2.2 (K_us = 0, b_r = 0) extended by the understeer gradient and the road-induced
+    steering offset b_r = K_us g sin(bank) (the steering a driver holds to go straight on a
+    banked or crowned road), so that the steering calibration is not biased by tyre slip.
+    """
+    h = np.zeros(NX)
+    return steer_model_into(x, delta_m, wheelbase, h), h
+
+
+@numba.njit(cache=True)
+def gyro_model_into(x: FloatArray, h: FloatArray) -> float:
+    """:func:`gyro_model` writing the Jacobian row into ``h`` (NX); returns the prediction."""
+    h[:] = 0.0
+    h[R] = 1.0
+    h[BG] = 1.0
+    return x[R] + x[BG]
 
 
 @numba.njit(cache=True)
 def gyro_model(x: FloatArray) -> tuple[float, FloatArray]:
     """Predicted gyro yaw rate r + b_g and its Jacobian row."""
     h = np.zeros(NX)
-    h[R] = 1.0
-    h[BG] = 1.0
-    return x[R] + x[BG], h
+    return gyro_model_into(x, h), h
+
+
+@numba.njit(cache=True)
+def gnss_model_into(x: FloatArray, ant_x: float, ant_y: float, he: FloatArray, hn: FloatArray
+                    ) -> tuple[float, float]:
+    """:func:`gnss_model` writing the Jacobian rows into ``he``, ``hn`` (NX each)."""
+    de, dn = lever_arm_enu(x[PSI], ant_x, ant_y)
+    he[:] = 0.0
+    hn[:] = 0.0
+    he[E] = 1.0
+    he[GE] = 1.0
+    he[PSI] = -dn  # d/dpsi (ax cos - ay sin) = -(ax sin + ay cos)
+    hn[N] = 1.0
+    hn[GN] = 1.0
+    hn[PSI] = de
+    return x[E] + x[GE] + de, x[N] + x[GN] + dn
 
 
 @numba.njit(cache=True)
@@ -166,13 +215,7 @@ def gnss_model(
     x: FloatArray, ant_x: float, ant_y: float
 ) -> tuple[float, float, FloatArray, FloatArray]:
     """Predicted antenna (e, n) = CG + GNSS error + R(psi) lever arm, and the Jacobian rows."""
-    de, dn = lever_arm_enu(x[PSI], ant_x, ant_y)
     he = np.zeros(NX)
     hn = np.zeros(NX)
-    he[E] = 1.0
-    he[GE] = 1.0
-    he[PSI] = -dn  # d/dpsi (ax cos - ay sin) = -(ax sin + ay cos)
-    hn[N] = 1.0
-    hn[GN] = 1.0
-    hn[PSI] = de
-    return x[E] + x[GE] + de, x[N] + x[GN] + dn, he, hn
+    pred_e, pred_n = gnss_model_into(x, ant_x, ant_y, he, hn)
+    return pred_e, pred_n, he, hn
