@@ -62,9 +62,11 @@ zero-order hold; rows before a sensor's first sample take that first sample).
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 
+import numba
 import numpy as np
 from numpy.typing import NDArray
 from scipy.signal import butter, sosfilt, sosfilt_zi
@@ -83,7 +85,7 @@ from sideslip.models.roll import (
     suspension_roll,
     tseng_gains,
 )
-from sideslip.signals import hold, speed_raw, standstill
+from sideslip.signals import STANDSTILL_SPEED, speed_raw
 from sideslip.vehicle import G, Vehicle
 
 FloatArray = NDArray[np.float64]
@@ -153,17 +155,48 @@ class Inputs:
     speed_dt: FloatArray
 
 
-def _first(values: FloatArray) -> float:
-    ok = np.isfinite(values)
-    return float(values[ok][0]) if ok.any() else 0.0
+@numba.njit(cache=True)
+def hold_first(values: FloatArray) -> FloatArray:  # pragma: no cover - compiled
+    """Zero-order hold of the finite samples onto every row, rows before the first sample
+    taking that first sample (0 when there is none): ``signals.hold(values, t,
+    fill=first sample)`` in one pass."""
+    n = values.size
+    last = 0.0
+    for k in range(n):
+        if math.isfinite(values[k]):
+            last = values[k]
+            break
+    out = np.empty(n)
+    for k in range(n):
+        if math.isfinite(values[k]):
+            last = values[k]
+        out[k] = last
+    return out
 
 
 def _held(drive: Drive, name: str) -> FloatArray:
     if name not in drive:
         return np.zeros_like(drive.t)
-    values = drive[name]
-    held, _ = hold(values, drive.t, fill=_first(values))
-    return held
+    return np.asarray(hold_first(drive[name]))
+
+
+@numba.njit(cache=True)
+def _gyro_bias_nb(t: FloatArray, wz: FloatArray, still: BoolArray, min_s: float
+                  ) -> FloatArray:  # pragma: no cover - compiled
+    """Running standstill mean of ``wz`` (see :func:`standstill_gyro_bias`), one pass."""
+    n = t.size
+    out = np.empty(n)
+    count = 0
+    total = 0.0
+    seen = 0.0
+    for k in range(n):
+        if still[k] and math.isfinite(wz[k]):
+            count += 1
+            total += wz[k]
+            seen += t[k] - t[k - 1] if k > 0 else 0.0
+        bias = total / max(count, 1) if count > 0 else 0.0
+        out[k] = bias if seen >= min_s else 0.0
+    return out
 
 
 def standstill_gyro_bias(t: FloatArray, wz: FloatArray, still: BoolArray) -> FloatArray:
@@ -172,39 +205,46 @@ def standstill_gyro_bias(t: FloatArray, wz: FloatArray, still: BoolArray) -> Flo
     Running mean of ``wz`` over the standstill rows seen so far, used once at least
     ``STANDSTILL_MIN_S`` of standstill has accumulated; 0 before.  rad/s on every row.
     """
-    use = still & np.isfinite(wz)
-    dt = np.diff(t, prepend=t[0])
-    count = np.cumsum(use)
-    total = np.cumsum(np.where(use, wz, 0.0))
-    seen = np.cumsum(np.where(use, dt, 0.0))
-    bias = np.where(count > 0, total / np.maximum(count, 1), 0.0)
-    return np.where(seen >= STANDSTILL_MIN_S, bias, 0.0)
+    return np.asarray(_gyro_bias_nb(np.asarray(t, dtype=float), np.asarray(wz, dtype=float),
+                                    np.asarray(still, dtype=np.bool_), STANDSTILL_MIN_S))
+
+
+@numba.njit(cache=True)
+def _sample_steps(t: FloatArray, fresh: BoolArray, first_dt: float
+                  ) -> FloatArray:  # pragma: no cover - compiled
+    """Time since the previous fresh row at each fresh row (``first_dt`` at the first), 0 else."""
+    out = np.zeros(t.size)
+    prev = -1
+    for k in range(t.size):
+        if fresh[k]:
+            out[k] = t[k] - t[prev] if prev >= 0 else first_dt
+            prev = k
+    return out
 
 
 def sensor_inputs(drive: Drive) -> Inputs:
-    """Hold the sensors onto every row; zero the gyro at standstill; see :class:`Inputs`."""
+    """Hold the sensors onto every row; zero the gyro at standstill; see :class:`Inputs`.
+
+    The standstill rows are those of :func:`sideslip.signals.standstill`, computed from the
+    held speed ``vx`` (the same hold of the same samples) rather than a second pass."""
     t = drive.t
     raw_speed = speed_raw(drive)
     if raw_speed is None:
         vx = np.zeros_like(t)
         fresh = np.zeros(t.size, dtype=bool)
+        still = np.zeros(t.size, dtype=bool)
     else:
-        vx, _ = hold(raw_speed, t, fill=_first(raw_speed))
+        vx = np.asarray(hold_first(raw_speed))
         fresh = np.isfinite(raw_speed)
-    rows = np.flatnonzero(fresh)
-    speed_dt = np.zeros_like(t)
-    if rows.size:
-        prev = np.concatenate(([rows[0]], rows[:-1]))
-        speed_dt[rows] = t[rows] - t[prev]
-        speed_dt[rows[0]] = drive.dt_median
+        still = np.abs(vx) < STANDSTILL_SPEED
+    speed_dt = np.asarray(_sample_steps(t, fresh, drive.dt_median if fresh.any() else 0.0))
     wz = drive["wz"] if "wz" in drive else np.zeros_like(t)
-    still = standstill(drive) if raw_speed is not None else np.zeros(t.size, dtype=bool)
     bias = standstill_gyro_bias(t, wz, still)
     return Inputs(
         t=t,
         ay_m=_held(drive, "ay"),
         ax=_held(drive, "ax"),
-        r=_held(drive, "wz") - bias,
+        r=np.asarray(hold_first(wz)) - bias,
         vx=vx,
         delta=_held(drive, "steer"),
         gyro_bias=bias,
@@ -213,19 +253,30 @@ def sensor_inputs(drive: Drive) -> Inputs:
     )
 
 
-def lowpass(x: FloatArray, t: FloatArray, cutoff_hz: float) -> FloatArray:
+@functools.lru_cache(maxsize=32)
+def _butter_sos(wn: float) -> tuple[FloatArray, FloatArray]:
+    """Second-order Butterworth low-pass at normalised cutoff ``wn`` as SOS and its initial
+    state per unit input (designed once per cutoff: shared, callers pass copies on)."""
+    sos = np.asarray(butter(2, wn, output="sos"), dtype=float)
+    return sos, np.asarray(sosfilt_zi(sos), dtype=float)
+
+
+def lowpass(x: FloatArray, t: FloatArray, cutoff_hz: float, dt: float | None = None
+            ) -> FloatArray:
     """Causal second-order Butterworth low-pass at the drive's median rate, started at rest
     on the mean of the first ``START_S`` seconds (a single noisy first sample would otherwise
-    bias the start).  Returns ``x`` unchanged when too short to filter."""
+    bias the start).  Returns ``x`` unchanged when too short to filter.  ``dt``: the median
+    sample interval of ``t`` (s) when the caller has it (computed otherwise)."""
     if x.size < 8:
         return x.copy()
-    dt = float(np.median(np.diff(t)))
+    if dt is None:
+        dt = float(np.median(np.diff(t)))
     nyq = 0.5 / dt
     if cutoff_hz >= 0.9 * nyq:
         return x.copy()
-    sos = butter(2, cutoff_hz / nyq, output="sos")
+    sos, zi = _butter_sos(cutoff_hz / nyq)
     x0 = float(np.mean(x[t <= t[0] + START_S]))
-    y, _ = sosfilt(sos, x, zi=sosfilt_zi(sos) * x0)
+    y, _ = sosfilt(sos.copy(), x, zi=zi * x0)
     return np.asarray(y, dtype=float)
 
 
@@ -269,13 +320,16 @@ class RollEstimate:
     params: dict[str, object] = field(default_factory=dict)
 
 
-def _channels(inp: Inputs, vehicle: Vehicle, cutoff: float
+def _channels(inp: Inputs, vehicle: Vehicle, cutoff: float, dt: float | None = None
               ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
-    """sin of phi_ss (eq 46), phi_ay (eq 55), phi_r (eq 56) on low-passed inputs."""
+    """sin of phi_ss (eq 46), phi_ay (eq 55), phi_r (eq 56) on low-passed inputs (``dt``:
+    median sample interval, s, see :func:`lowpass`)."""
     t = inp.t
-    ay = lowpass(inp.ay_m, t, cutoff)
-    r = lowpass(inp.r, t, cutoff)
-    d = lowpass(inp.delta, t, cutoff)
+    if dt is None and t.size >= 8:
+        dt = float(np.median(np.diff(t)))
+    ay = lowpass(inp.ay_m, t, cutoff, dt)
+    r = lowpass(inp.r, t, cutoff, dt)
+    d = lowpass(inp.delta, t, cutoff, dt)
     v = np.abs(inp.vx)
     gains = tseng_gains(v, vehicle.wheelbase, vehicle.understeer_gradient)
     s_ss = np.clip((ay - r * v) / G, -1.0, 1.0)
@@ -325,20 +379,21 @@ def estimate_roll_index(inp: Inputs, vehicle: Vehicle, identify_gradient: bool =
     file's m h / k.
     """
     t = inp.t
+    dt = float(np.median(np.diff(t))) if t.size >= 8 else None  # for every low-pass below
     moving = np.abs(inp.vx) >= V_MIN
-    s_ss, s_ay, s_r, _, ay_f, _ = _channels(inp, vehicle, roll_cutoff_hz)
+    s_ss, s_ay, s_r, _, ay_f, _ = _channels(inp, vehicle, roll_cutoff_hz, dt)
     phi_ss = np.arcsin(s_ss)
     # flags on more strongly smoothed channels
-    fs_ss, fs_ay, fs_r, _, _, d_f = _channels(inp, vehicle, FLAG_CUTOFF_HZ)
+    fs_ss, fs_ay, fs_r, _, _, d_f = _channels(inp, vehicle, FLAG_CUTOFF_HZ, dt)
     f_ss, f_ay, f_r = np.arcsin(fs_ss), np.arcsin(fs_ay), np.arcsin(fs_r)
     d_ss, d_ay, d_r = ddt(f_ss, t), ddt(f_ay, t), ddt(f_r, t)
     shape = ddt(np.abs(d_ay - d_ss) - np.abs(d_r - d_ss), t)
-    shape = lowpass(shape, t, FLAG_CUTOFF_HZ)
+    shape = lowpass(shape, t, FLAG_CUTOFF_HZ, dt)
     f = held_for(np.abs(shape) < F_TH, t, T_TH1)
     # the yaw channel resolves a bank only beyond its own error (docstring)
     resolves = yaw_bank_resolution(vehicle, np.abs(inp.vx), d_f) < np.abs(f_ay)
     g = held_for((f_ay * f_r > 0.0) | ~resolves, t, T_TH2)
-    r_f = lowpass(inp.r, t, FLAG_CUTOFF_HZ)
+    r_f = lowpass(inp.r, t, FLAG_CUTOFF_HZ, dt)
     h = held_for(
         (np.abs(d_f) < G_TH1) & (np.abs(ddt(d_f, t)) < G_TH2) & (np.abs(r_f) < G_TH3),
         t, T_STRAIGHT,
