@@ -171,3 +171,41 @@ def test_roll_methods_finite_through_nan_gaps() -> None:
     for m in ("roll_index", "roll_dfc"):
         est = run(m, gap)  # run_method raises if any output is not finite
         assert rmse_deg(est["roll"] - drive["ref_roll"]) < 4.0, m
+
+
+def test_compiled_input_passes_equal_their_numpy_forms() -> None:
+    """hold_first = signals.hold with the first sample as fill; the standstill gyro mean as
+    cumulative sums; sensor_inputs' standstill rows = signals.standstill (computed from the
+    held speed it already has)."""
+    from sideslip.methods.roll_index import (
+        STANDSTILL_MIN_S,
+        hold_first,
+        sensor_inputs,
+        standstill_gyro_bias,
+    )
+    from sideslip.signals import hold, standstill
+
+    rng = np.random.default_rng(7)
+    t = np.cumsum(rng.uniform(0.009, 0.011, 4000))
+    x = rng.normal(size=t.size)
+    x[:13] = np.nan
+    x[rng.random(t.size) < 0.4] = np.nan
+    first = float(x[np.isfinite(x)][0])
+    np.testing.assert_array_equal(hold_first(x), hold(x, t, fill=first)[0])
+    assert np.all(hold_first(np.full(5, np.nan)) == 0.0)
+    still = (t > 5.0) & (t < 5.3) | (t > 20.0) & (t < 21.0)
+    wz = rng.normal(0.01, 0.002, t.size)
+    wz[rng.random(t.size) < 0.1] = np.nan
+    use = still & np.isfinite(wz)
+    count = np.cumsum(use)
+    total = np.cumsum(np.where(use, wz, 0.0))
+    seen = np.cumsum(np.where(use, np.diff(t, prepend=t[0]), 0.0))
+    ref = np.where(seen >= STANDSTILL_MIN_S, np.where(count > 0, total / np.maximum(count, 1),
+                                                      0.0), 0.0)
+    got = standstill_gyro_bias(t, wz, still)
+    np.testing.assert_array_equal(got, ref)
+    assert got[t < 20.15].max() == 0.0 and got[-1] > 0.0  # 0.3 s is not enough, 1.3 s is
+    drive = sim_drive("demo")
+    inp = sensor_inputs(drive)
+    np.testing.assert_array_equal(
+        inp.gyro_bias, standstill_gyro_bias(drive.t, drive["wz"], standstill(drive)))

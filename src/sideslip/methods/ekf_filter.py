@@ -11,7 +11,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from sideslip.filters.kalman import nonzero_columns_nb, predict_rows_ws_nb, update_scalar_ws_nb
+from sideslip.filters.kalman import update_scalar_ws_nb
 from sideslip.gnss import gauss_markov_nb
 from sideslip.models.kinematic import kinematic_beta, lever_arm_enu
 from sideslip.models.kinematic_ekf import (
@@ -32,6 +32,7 @@ from sideslip.models.kinematic_ekf import (
     V,
     gnss_model_into,
     gyro_model_into,
+    propagate_covariance,
     steer_corrected,
     steer_denominator,
     steer_model_into,
@@ -139,17 +140,13 @@ def process_noise(
 
 class Workspace(NamedTuple):
     """Scratch arrays of one run of :func:`ekf_loop`, allocated once instead of on every row:
-    the process noise ``Q``, the non-zero columns of F (``rows``), the predicted covariance
-    ``Pn``, the product F P (``tmp``), a zero diagonal (``q0``), the two rows of a scalar
-    update (``work``: P h' and the gain), the predicted state ``xn`` and Jacobian ``F``, and
-    the measurement Jacobian rows (``h`` for the wheel, steering and gyro updates, ``he``,
-    ``hn`` for GNSS)."""
+    the process noise ``Q``, the product F P (``tmp``), the two rows of a scalar update
+    (``work``: P h' and the gain), the predicted state ``xn`` and Jacobian ``F``, and the
+    measurement Jacobian rows (``h`` for the wheel, steering and gyro updates, ``he``, ``hn``
+    for GNSS)."""
 
     Q: FloatArray
-    rows: NDArray[np.int64]
-    Pn: FloatArray
     tmp: FloatArray
-    q0: FloatArray
     work: FloatArray
     xn: FloatArray
     F: FloatArray
@@ -161,32 +158,23 @@ class Workspace(NamedTuple):
 @numba.njit(cache=True)
 def workspace() -> Workspace:
     """A fresh :class:`Workspace` for the 14-state filter."""
-    return Workspace(np.zeros((NX, NX)), np.empty((NX, NX), dtype=np.int64), np.empty((NX, NX)),
-                     np.empty((NX, NX)), np.zeros(NX), np.zeros((2, NX)), np.empty(NX),
+    return Workspace(np.zeros((NX, NX)), np.empty((NX, NX)), np.zeros((2, NX)), np.empty(NX),
                      np.empty((NX, NX)), np.zeros(NX), np.zeros(NX), np.zeros(NX))
 
 
 @numba.njit(cache=True)
 def _predict(x: FloatArray, P: FloatArray, dt: float, c: LoopConsts, ws: Workspace) -> None:
     """Propagate x and P over dt with the process model and its sparse Jacobian:
-    P <- F P F' + (Q + Q')/2 by its non-zero entries (the steps of
-    :func:`sideslip.filters.kalman.predict_sparse_nb`, in the caller's workspace)."""
+    P <- F P F' + (Q + Q')/2 (:func:`sideslip.models.kinematic_ekf.propagate_covariance`),
+    in the caller's workspace."""
     tu = c.tuning
     a_gm, q_gm = gauss_markov_nb(dt, tu.gnss_tau_s, c.gnss_gm_std)
     a_road, q_road = gauss_markov_nb(dt, tu.road_tau_s, c.road_std)
-    Q = ws.Q
-    process_noise(Q, x, dt, c, q_gm, q_road)  # at the step's start state, as the Euler step
-    xn, F = ws.xn, ws.F
-    transition_into(x, dt, c.lr, a_gm, a_road, xn, F)
-    nonzero_columns_nb(F, ws.rows)
-    Pn = ws.Pn
-    predict_rows_ws_nb(P, F, ws.rows, ws.q0, Pn, ws.tmp)
+    process_noise(ws.Q, x, dt, c, q_gm, q_road)  # at the step's start state, as the Euler step
+    transition_into(x, dt, c.lr, a_gm, a_road, ws.xn, ws.F)
+    propagate_covariance(P, ws.F, ws.Q, ws.tmp)
     for i in range(NX):
-        x[i] = xn[i]
-        for j in range(i, NX):
-            v = Pn[i, j] + 0.5 * (Q[i, j] + Q[j, i])
-            P[i, j] = v
-            P[j, i] = v
+        x[i] = ws.xn[i]
 
 
 @numba.njit(cache=True)

@@ -112,10 +112,12 @@ def blocked_consistency(t: FloatArray, nis: FloatArray, dof: FloatArray, window_
         block = np.floor((t - t[0]) / BLOCK_S).astype(np.intp)
         uniq, inv = np.unique(block, return_inverse=True)
         ok = np.isfinite(nis) & (dof > 0)
-        sum_nis = np.bincount(inv, weights=np.where(ok, nis, 0.0), minlength=uniq.size)
-        sum_dof = np.bincount(inv, weights=np.where(ok, dof, 0.0), minlength=uniq.size)
-        t_block = (np.bincount(inv, weights=t, minlength=uniq.size)
-                   / np.bincount(inv, minlength=uniq.size))
+        sum_nis = np.asarray(np.bincount(inv, weights=np.where(ok, nis, 0.0),
+                                         minlength=uniq.size), dtype=float)
+        sum_dof = np.asarray(np.bincount(inv, weights=np.where(ok, dof, 0.0),
+                                         minlength=uniq.size), dtype=float)
+        t_block = np.asarray(np.bincount(inv, weights=t, minlength=uniq.size)
+                             / np.bincount(inv, minlength=uniq.size), dtype=float)
     cons = nis_consistency(t_block, np.where(sum_dof > 0, sum_nis, np.nan), sum_dof,
                            window_s=window_s, causal=causal)
     summary = cons.summary(t_block)

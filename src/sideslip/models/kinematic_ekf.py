@@ -105,6 +105,46 @@ def transition(
 
 
 @numba.njit(cache=True)
+def propagate_covariance(P: FloatArray, F: FloatArray, Q: FloatArray, tmp: FloatArray) -> None:
+    """In place P <- F P F' + (Q + Q')/2 for a Jacobian F of :func:`transition`'s pattern.
+
+    F is the identity but for rows e, n (columns e, psi, v, r), psi (psi, r) and the
+    Gauss-Markov diagonal (g_e, g_n, b_r); only those entries are read.  The sums run in the
+    order of :func:`sideslip.filters.kalman.predict_sparse_nb` (non-zero columns ascending),
+    so the result is that kernel's (tested) without its search for the non-zeros.
+    ``tmp`` (NX x NX) is scratch; P stays exactly symmetric.
+    """
+    for i in range(NX):  # tmp = F P
+        for j in range(NX):
+            tmp[i, j] = P[i, j]
+    f_ep, f_ev, f_er = F[E, PSI], F[E, V], F[E, R]
+    f_np, f_nv, f_nr = F[N, PSI], F[N, V], F[N, R]
+    f_pr = F[PSI, R]
+    for j in range(NX):
+        tmp[E, j] = F[E, E] * P[E, j] + f_ep * P[PSI, j] + f_ev * P[V, j] + f_er * P[R, j]
+        tmp[N, j] = F[N, N] * P[N, j] + f_np * P[PSI, j] + f_nv * P[V, j] + f_nr * P[R, j]
+        tmp[PSI, j] = F[PSI, PSI] * P[PSI, j] + f_pr * P[R, j]
+        tmp[GE, j] = F[GE, GE] * P[GE, j]
+        tmp[GN, j] = F[GN, GN] * P[GN, j]
+        tmp[BR, j] = F[BR, BR] * P[BR, j]
+    for j in range(NX):  # P = tmp F' + (Q + Q')/2, upper triangle mirrored
+        for i in range(j + 1):
+            if j == E:
+                acc = tmp[i, E] * F[E, E] + tmp[i, PSI] * f_ep + tmp[i, V] * f_ev + tmp[i, R] * f_er
+            elif j == N:
+                acc = tmp[i, N] * F[N, N] + tmp[i, PSI] * f_np + tmp[i, V] * f_nv + tmp[i, R] * f_nr
+            elif j == PSI:
+                acc = tmp[i, PSI] * F[PSI, PSI] + tmp[i, R] * f_pr
+            elif j == GE or j == GN or j == BR:
+                acc = tmp[i, j] * F[j, j]
+            else:
+                acc = tmp[i, j]
+            v = acc + 0.5 * (Q[i, j] + Q[j, i])
+            P[i, j] = v
+            P[j, i] = v
+
+
+@numba.njit(cache=True)
 def wheel_model_into(x: FloatArray, side: int, track_rear: float, h: FloatArray) -> float:
     """:func:`wheel_model` writing the Jacobian row into ``h`` (NX); returns the prediction."""
     sgn = -1.0 if side == 0 else 1.0
