@@ -77,6 +77,7 @@ from sideslip.methods.observer_health import stale_health
 from sideslip.methods.registry import SPEED, register
 from sideslip.methods.roll_gradient import RollGradient, identify_roll_gradient
 from sideslip.models.roll import (
+    TsengGains,
     dynamic_bank_weight,
     dynamic_factor,
     roll_dynamics,
@@ -287,19 +288,43 @@ def ddt(x: FloatArray, t: FloatArray) -> FloatArray:
     return out
 
 
+@numba.njit(cache=True)
+def _held_for_nb(cond: BoolArray, t: FloatArray, duration: float
+                 ) -> BoolArray:  # pragma: no cover - compiled
+    out = np.empty(cond.size, dtype=np.bool_)
+    last = -1  # latest row where cond was false
+    for k in range(cond.size):
+        if not cond[k]:
+            last = k
+        since = t[k] - t[last] if last >= 0 else t[k] - t[0] + duration
+        out[k] = cond[k] and since >= duration
+    return out
+
+
+@numba.njit(cache=True)
+def _seen_within_nb(cond: BoolArray, t: FloatArray, duration: float
+                    ) -> BoolArray:  # pragma: no cover - compiled
+    out = np.empty(cond.size, dtype=np.bool_)
+    last = -1  # latest row where cond was true
+    for k in range(cond.size):
+        if cond[k]:
+            last = k
+        out[k] = last >= 0 and t[k] - t[last] <= duration
+    return out
+
+
 def held_for(cond: BoolArray, t: FloatArray, duration: float) -> BoolArray:
-    """True where ``cond`` has held on every row of the last ``duration`` seconds."""
-    idx = np.where(~cond, np.arange(cond.size), -1)
-    np.maximum.accumulate(idx, out=idx)
-    since = np.where(idx >= 0, t - t[np.maximum(idx, 0)], t - t[0] + duration)
-    return cond & (since >= duration)
+    """True where ``cond`` has held on every row of the last ``duration`` seconds (one
+    compiled pass)."""
+    return np.asarray(_held_for_nb(np.asarray(cond, dtype=np.bool_), np.asarray(t, dtype=float),
+                                   float(duration)))
 
 
 def seen_within(cond: BoolArray, t: FloatArray, duration: float) -> BoolArray:
-    """True where ``cond`` was true on some row of the last ``duration`` seconds."""
-    idx = np.where(cond, np.arange(cond.size), -1)
-    np.maximum.accumulate(idx, out=idx)
-    return (idx >= 0) & (t - t[np.maximum(idx, 0)] <= duration)
+    """True where ``cond`` was true on some row of the last ``duration`` seconds (one
+    compiled pass)."""
+    return np.asarray(_seen_within_nb(np.asarray(cond, dtype=np.bool_),
+                                      np.asarray(t, dtype=float), float(duration)))
 
 
 @dataclass(frozen=True)
@@ -320,10 +345,12 @@ class RollEstimate:
     params: dict[str, object] = field(default_factory=dict)
 
 
-def _channels(inp: Inputs, vehicle: Vehicle, cutoff: float, dt: float | None = None
-              ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
-    """sin of phi_ss (eq 46), phi_ay (eq 55), phi_r (eq 56) on low-passed inputs (``dt``:
-    median sample interval, s, see :func:`lowpass`)."""
+def _channels(inp: Inputs, vehicle: Vehicle, cutoff: float, dt: float | None = None,
+              gains: TsengGains | None = None
+              ) -> tuple[FloatArray, FloatArray, FloatArray, TsengGains, FloatArray, FloatArray]:
+    """sin of phi_ss (eq 46), phi_ay (eq 55), phi_r (eq 56) on low-passed inputs, Tseng's
+    gains (eqs 49-52) at |v_x| and the low-passed a_y, delta.  ``dt``: median sample interval
+    (s, see :func:`lowpass`) and ``gains`` when the caller has them already."""
     t = inp.t
     if dt is None and t.size >= 8:
         dt = float(np.median(np.diff(t)))
@@ -331,12 +358,12 @@ def _channels(inp: Inputs, vehicle: Vehicle, cutoff: float, dt: float | None = N
     r = lowpass(inp.r, t, cutoff, dt)
     d = lowpass(inp.delta, t, cutoff, dt)
     v = np.abs(inp.vx)
-    gains = tseng_gains(v, vehicle.wheelbase, vehicle.understeer_gradient)
+    if gains is None:
+        gains = tseng_gains(v, vehicle.wheelbase, vehicle.understeer_gradient)
     s_ss = np.clip((ay - r * v) / G, -1.0, 1.0)
     s_ay = sin_roll_from_ay(ay, d, gains)
     s_r = sin_roll_from_r(r, d, gains)
-    dfc = dynamic_factor(s_ay, s_r, s_ss, v, gains)
-    return s_ss, s_ay, s_r, dfc, ay, d
+    return s_ss, s_ay, s_r, gains, ay, d
 
 
 def yaw_bank_resolution(vehicle: Vehicle, speed: FloatArray, delta: FloatArray) -> FloatArray:
@@ -381,10 +408,10 @@ def estimate_roll_index(inp: Inputs, vehicle: Vehicle, identify_gradient: bool =
     t = inp.t
     dt = float(np.median(np.diff(t))) if t.size >= 8 else None  # for every low-pass below
     moving = np.abs(inp.vx) >= V_MIN
-    s_ss, s_ay, s_r, _, ay_f, _ = _channels(inp, vehicle, roll_cutoff_hz, dt)
+    s_ss, s_ay, s_r, gains, ay_f, _ = _channels(inp, vehicle, roll_cutoff_hz, dt)
     phi_ss = np.arcsin(s_ss)
     # flags on more strongly smoothed channels
-    fs_ss, fs_ay, fs_r, _, _, d_f = _channels(inp, vehicle, FLAG_CUTOFF_HZ, dt)
+    fs_ss, fs_ay, fs_r, _, _, d_f = _channels(inp, vehicle, FLAG_CUTOFF_HZ, dt, gains)
     f_ss, f_ay, f_r = np.arcsin(fs_ss), np.arcsin(fs_ay), np.arcsin(fs_r)
     d_ss, d_ay, d_r = ddt(f_ss, t), ddt(f_ay, t), ddt(f_r, t)
     shape = ddt(np.abs(d_ay - d_ss) - np.abs(d_r - d_ss), t)
@@ -429,7 +456,8 @@ def estimate_roll_dfc(inp: Inputs, vehicle: Vehicle, roll_cutoff_hz: float = ROL
     steady phi_ss is bank + suspension roll).  Below ``V_MIN``, w = 1.
     """
     t = inp.t
-    s_ss, _, _, dfc, ay_f, _ = _channels(inp, vehicle, roll_cutoff_hz)
+    s_ss, s_ay, s_r, gains, ay_f, _ = _channels(inp, vehicle, roll_cutoff_hz)
+    dfc = dynamic_factor(s_ay, s_r, s_ss, np.abs(inp.vx), gains)
     w = dynamic_bank_weight(dfc, ddt(s_ss, t))
     w = np.where(np.abs(inp.vx) >= V_MIN, w, 1.0)
     phi_sus = suspension_roll(t, ay_f, vehicle)
