@@ -69,16 +69,18 @@ def _block_sums_nb(
     the mean time.  The last item is False (and the rest unusable) if ``t`` decreases."""
     n = t.size
     inv = np.empty(n, dtype=np.intp)
-    sum_nis = np.zeros(n)
-    sum_dof = np.zeros(n)
-    sum_t = np.zeros(n)
-    count = np.zeros(n)
+    # blocks of a non-decreasing t: at most the last row's block index + 1 (and n)
+    size = min(n, max(1, math.floor((t[n - 1] - t[0]) / block_s) + 1)) if n else 0
+    sum_nis = np.zeros(size)
+    sum_dof = np.zeros(size)
+    sum_t = np.zeros(size)
+    count = np.zeros(size)
     j = -1
     prev = 0
     for k in range(n):
         b = math.floor((t[k] - t[0]) / block_s)
         if j < 0 or b != prev:
-            if j >= 0 and b < prev:
+            if (j >= 0 and b < prev) or j + 1 >= size:
                 return inv, sum_nis, sum_dof, sum_t, False
             j += 1
             prev = b
