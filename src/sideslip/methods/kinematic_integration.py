@@ -29,7 +29,8 @@ from sideslip.drive import Drive
 from sideslip.estimate import Estimate
 from sideslip.methods.observer_health import stale_health
 from sideslip.methods.registry import SPEED, register
-from sideslip.signals import vehicle_speed
+from sideslip.methods.roll_index import hold_first
+from sideslip.signals import speed_raw
 from sideslip.vehicle import Vehicle
 
 V_GATE = 3.0  # m/s: below this, beta is reset to zero
@@ -117,7 +118,8 @@ def kinematic_integration(drive: Drive, vehicle: Vehicle,
                           settings: KinematicIntegrationSettings | None = None) -> Estimate:
     """Sideslip by integrating beta' = a_y/v_x - r from zero; see module docstring."""
     st = settings or KinematicIntegrationSettings()
-    vx = vehicle_speed(drive)
+    raw = speed_raw(drive)  # vehicle_speed: the same hold, in one compiled pass
+    vx = np.zeros_like(drive.t) if raw is None else np.asarray(hold_first(raw))
     beta, r, imu = _integrate(drive.t, drive["ay"], drive["wz"], vx, st.v_gate_m_s)
     health = drift_health(drive.t, vx, st.v_gate_m_s)
     np.maximum(health, stale_health(drive.t, imu), out=health)  # held samples in a sensor gap

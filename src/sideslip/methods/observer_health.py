@@ -131,12 +131,20 @@ def _stale_nb(t: FloatArray, fresh: BoolArray, full_s: float, level: float
               ) -> FloatArray:  # pragma: no cover - compiled
     """The per-row gap term of :func:`stale_health` (``fresh`` has at least one True)."""
     n = t.size
-    rows = np.flatnonzero(fresh)
+    n_fresh = 0
+    for k in range(n):
+        n_fresh += fresh[k]
     normal = 0.1
-    if rows.size > 1:
-        gaps = np.empty(rows.size - 1)
-        for i in range(rows.size - 1):
-            gaps[i] = t[rows[i + 1]] - t[rows[i]]
+    if n_fresh > 1:
+        gaps = np.empty(n_fresh - 1)  # intervals between consecutive fresh rows
+        m = 0
+        prev = -1
+        for k in range(n):
+            if fresh[k]:
+                if prev >= 0:
+                    gaps[m] = t[k] - t[prev]
+                    m += 1
+                prev = k
         normal = max(2.0 * np.median(gaps), 0.1)
     out = np.empty(n)
     last = -1
