@@ -13,6 +13,7 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
+import pyarrow as pa
 from numpy.typing import NDArray
 
 from sideslip.errors import InputError
@@ -351,6 +352,9 @@ def load_drive(path: str | Path, compact: bool = False, reference: bool | None =
         names, columns = _parquet_columns(p, src, meta, keep_reference)
         _read_sidecar(p, meta)
         cols = validate_columns(names, columns, src, store)
+        # arrow keeps the pages of the columns it decoded for reuse: hand them back, or they
+        # stay resident under the methods (0.3 GB after a 24 h drive)
+        pa.default_memory_pool().release_unused()
     _geodetic_to_enu(cols, meta, src)
     if not keep_reference:
         cols = {k: v for k, v in cols.items() if not k.startswith(REFERENCE_PREFIX)}
