@@ -478,9 +478,16 @@ def _block_nis(
     sum over factors of (sum nu)^2 / sum S and its degrees of freedom (the factors with an
     update in the block); one pass over the rows."""
     n, n_fac = innov.shape
-    start = np.empty(n, dtype=np.int64)
-    nis = np.zeros(n)
-    dof = np.zeros(n)
+    n_blocks = 0  # first pass: the number of blocks (the outputs are allocated to it)
+    current = -1
+    for k in range(n):
+        b = int(np.floor((t[k] - t[0]) / block_s))
+        if b != current:
+            n_blocks += 1
+            current = b
+    start = np.empty(n_blocks, dtype=np.int64)
+    nis = np.zeros(n_blocks)
+    dof = np.zeros(n_blocks)
     sum_nu = np.zeros(n_fac)
     sum_s = np.zeros(n_fac)
     nb = 0
@@ -504,7 +511,7 @@ def _block_nis(
             if np.isfinite(innov[k, m]) and np.isfinite(S[k, m]):
                 sum_nu[m] += innov[k, m]
                 sum_s[m] += S[k, m]
-    return start[:nb].copy(), nis[:nb].copy(), dof[:nb].copy()
+    return start, nis, dof
 
 
 def block_consistency(
@@ -525,6 +532,7 @@ def block_consistency(
     n = innov.shape[0]
     start, nis, dof = _block_nis(t, innov, S, block_s)
     check = nis_consistency(t[start], nis, dof, window_s=WINDOW_S, causal=causal)
-    rows = np.repeat(np.arange(start.size), np.diff(np.r_[start, n]))
-    return Consistency(check.mean_nis[rows], check.inflation[rows], check.health[rows],
-                       check.flagged[rows], check.bound[rows])  # fmt: skip
+    rows = np.diff(np.r_[start, n])  # rows per block
+    return Consistency(np.repeat(check.mean_nis, rows), np.repeat(check.inflation, rows),
+                       np.repeat(check.health, rows), np.repeat(check.flagged, rows),
+                       np.repeat(check.bound, rows))  # fmt: skip
