@@ -166,8 +166,8 @@ class GraphInputs:
     ``delta`` held road-wheel angle (rad); ``v_dynamics`` and ``v_measurement`` the speeds
     (m/s) used in the dynamic and the a_y factors (clamped, module docstring); ``low_speed``
     rows below the speed gate or reversing; ``time_gap`` steps longer than ``max_step``
-    (length N - 1); ``wz`` and ``ay`` the raw samples (NaN where the sensor has no fresh
-    sample).
+    (length N - 1); ``wz`` and ``ay`` the raw samples as the drive stores them (float32 in a
+    compact drive, float64 otherwise; NaN where the sensor has no fresh sample).
     """
 
     t: FloatArray
@@ -176,8 +176,14 @@ class GraphInputs:
     v_measurement: FloatArray
     time_gap: NDArray[np.bool_]
     low_speed: NDArray[np.bool_]
-    wz: FloatArray
-    ay: FloatArray
+    wz: NDArray[np.floating]
+    ay: NDArray[np.floating]
+
+
+def _as_stored_float(values: object) -> NDArray[np.floating]:
+    """A column as stored when it is float32 or float64, else as float64."""
+    arr = np.asarray(values)
+    return arr if arr.dtype in (np.float32, np.float64) else arr.astype(float)
 
 
 def graph_inputs(
@@ -198,7 +204,10 @@ def graph_inputs(
     dt_row = np.append(np.where(gap, 0.0, dt), 0.0)
     v_measurement = np.maximum(speed, settings.speed_gate)
     v_dynamics = np.maximum(v_measurement, dt_row * stiff)
-    return GraphInputs(t, delta, v_dynamics, v_measurement, gap, low, drive["wz"], drive["ay"])
+    # the sensor samples as stored (float32 in a compact drive): the compiled factor pass reads
+    # each one into double precision exactly, so no float64 copy of the drive is kept
+    wz, ay = (_as_stored_float(drive.data[k]) for k in ("wz", "ay"))
+    return GraphInputs(t, delta, v_dynamics, v_measurement, gap, low, wz, ay)
 
 
 def build_graph(
