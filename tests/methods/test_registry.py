@@ -47,17 +47,7 @@ def _peak_bytes(name, drive, vehicle):
     return peak
 
 
-# measured after merging the compiled graph assembly (fg speed work) over the graph-freeing
-# memory work: the graph's sigmas and weights are both held (427 B/row for fg_batch); issue 17
-# stays open for these two until the graph keeps only its weights
-OVER_BUDGET = {"fg_batch": 427, "kf_linear": 395}
-
-
-@pytest.mark.parametrize(
-    "name",
-    [pytest.param(n, marks=pytest.mark.xfail(strict=True, reason=f"{OVER_BUDGET[n]} B/row measured"))
-     if n in OVER_BUDGET else n for n in HEAVY],
-)  # fmt: skip
+@pytest.mark.parametrize("name", HEAVY)
 def test_heavy_method_peak_memory_per_row_fits_a_day_long_drive_in_4_gb(long_drive, name):
     drive, vehicle = long_drive
     run_method(name, drive.slice(0, 6000), vehicle)  # compile and warm caches first
