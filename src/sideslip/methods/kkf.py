@@ -55,7 +55,7 @@ from numpy.typing import NDArray
 from sideslip import gnss, typical
 from sideslip.drive import Drive
 from sideslip.estimate import Estimate
-from sideslip.filters.kalman import predict_nb, update_scalar_nb
+from sideslip.filters.kalman import predict_ws_nb, update_scalar_ws_nb
 from sideslip.filters.nis_windows import binned_nis_consistency
 from sideslip.frames import wrap_angle
 from sideslip.methods.mkf import (
@@ -285,6 +285,7 @@ def _kkf_loop(
     Gu = np.zeros(3)
     h_psi = np.array([1.0, 0.0, 0.0])
     h_b = np.array([0.0, 1.0, 0.0])
+    work = np.zeros((8, 3))  # filters.kalman.workspace(3): no per-row allocation
     w = 0.0
     st = False
     on_time = 0.0
@@ -307,11 +308,11 @@ def _kkf_loop(
                 Q[0, 0] = 0.0
             else:
                 Gu[0] = dt * w
-            predict_nb(x, P, F, Q, Gu)
+            predict_ws_nb(x, P, F, Q, Gu, work)
         w = w_new
         if zero_rate[k] and np.isfinite(wz[k]):
             # gyro at standstill reads its bias
-            update_scalar_nb(x, P, wz[k] - x[1], h_b, gyro_var[k])
+            update_scalar_ws_nb(x, P, wz[k] - x[1], h_b, gyro_var[k], work)
         dt_k = t[k] - t[k - 1] if k > 0 else 0.0
         yaw_dev = wz_mean[k] - x[1] - x[2] * wz_mean[k]
         yaw_dev_fast = wz_fast[k] - x[1] - x[2] * wz_fast[k]
@@ -328,8 +329,8 @@ def _kkf_loop(
         straight[k] = st
         if st and np.isfinite(course[k]):
             nu = _wrap(course[k] - x[0])
-            S[k] = update_scalar_nb(
-                x, P, nu, h_psi, course_var[k] + sigma_beta_straight * sigma_beta_straight
+            S[k] = update_scalar_ws_nb(
+                x, P, nu, h_psi, course_var[k] + sigma_beta_straight * sigma_beta_straight, work
             )
             innov[k] = nu
         for i in range(3):

@@ -84,17 +84,17 @@ def choose_noise(
     tune_beta: bool = True,
 ) -> NoiseChoice:
     """Pick the factors (module docstring).  ``prob``: an MKF problem (frozen dataclass with a
-    ``Qd`` field); ``qd_of(steer_yaw_factor, beta_factor)`` the rescaled Q_d table; ``run`` the
-    filter pass returning innovations (``gyro_innov``/``gyro_s``/``course_innov``/
-    ``course_s``).  A factor not tuned stays 1."""
-    # only the scores are kept (not the passes' state arrays): memory stays one pass
+    ``Qd`` field); ``qd_of(steer_yaw_factor, beta_factor)`` the rescaled Q_d table; ``run`` one
+    filter pass returning ``((gyro -2 ln L, gyro updates), (course -2 ln L, course updates))``
+    (:func:`neg2_log_likelihood` of each channel, e.g. :func:`sideslip.methods.mkf.mkf_scores`,
+    which keeps no per-row output).  A factor not tuned stays 1."""
+    # each grid point is run once; only its scores are kept: memory stays one pass
     cache: dict[tuple[float, float], tuple[tuple[float, int], tuple[float, int]]] = {}
 
     def scores_of(fs: float, fb: float) -> tuple[tuple[float, int], tuple[float, int]]:
         if (fs, fb) not in cache:
-            res = run(dataclasses.replace(prob, Qd=qd_of(fs, fb)))
-            cache[(fs, fb)] = (neg2_log_likelihood(res.gyro_innov, res.gyro_s),
-                               neg2_log_likelihood(res.course_innov, res.course_s))
+            gyro, course = run(dataclasses.replace(prob, Qd=qd_of(fs, fb)))
+            cache[(fs, fb)] = ((float(gyro[0]), int(gyro[1])), (float(course[0]), int(course[1])))
         return cache[(fs, fb)]
 
     fs_scores: dict[str, float] = {}
