@@ -21,8 +21,9 @@ measures what the density drives:
 
 -2 ln L = sum over updates of ln S + nu^2 / S (constants dropped).  Cost: one filter pass per
 grid point (|STEER_YAW_GRID| x |BETA_GRID| = 12 passes of the numba loop, the discretised model
-table shared, Q_d being linear in Q_c), linear in the drive's length; only each pass's scores
-are kept, so the memory is that of one pass.  The grids stop at
+table shared, Q_d being linear in Q_c), linear in the drive's length; a tuning pass sums the
+scores inside the compiled loop and keeps no per-row output
+(:func:`sideslip.methods.mkf.mkf_scores`), so the memory is that of the problem.  The grids stop at
 the largest factors checked on the simulator (a sideslip density beyond 30x typical let the
 filter chase the course noise: beta_std no longer covered the error on the race lap).
 """
