@@ -21,10 +21,12 @@ from tests.conftest import sim_drive
 # and numba's arrays) per extra row: measured between two lengths so that the fixed cost of a
 # run (compiled code, chunk buffers) cancels.  Before the chunked observer matrices, the
 # compact EKF storage, the streamed input health and the graph freed after assembly these
-# methods took 400-560 B/row.
+# methods took 400-560 B/row (mkf 379, mkf_adaptive 392, kkf 302 before the MKF/KKF outputs
+# were formed in place).
 BYTES_PER_ROW_BUDGET = 340.0
 HEAVY = ("obs_modified", "obs_modified_nocomp", "obs_bicycle", "ekf_wss_sas", "ekf_wss_sas_imu",
-         "doppler_slip", "doppler_slip_noroll", "kf_linear", "fg_batch", "fg_lag")  # fmt: skip
+         "doppler_slip", "doppler_slip_noroll", "kf_linear", "fg_batch", "fg_lag",
+         "mkf", "mkf_adaptive", "kkf")  # fmt: skip
 ROWS = (60_000, 180_000)
 
 
