@@ -31,7 +31,10 @@ from sideslip.filters.kalman import (
     update_robust_scalar_ws_nb,
 )
 from sideslip.gnss import gauss_markov_nb
+from sideslip.methods.fused_updates import wheel_slip_ratio
 from sideslip.models.fused_measurements import (
+    A_LF,
+    A_LR,
     A_NF,
     A_NR,
     front_axle_force,
@@ -41,7 +44,7 @@ from sideslip.models.fused_measurements import (
     standstill_yaw_rate,
     wheel_speed,
 )
-from sideslip.models.fused_process import ICX, IMU, IPE, IPN, ISF, ISR, IVX, IVY, U_AX, process_into
+from sideslip.models.fused_process import ICX, IMU, IPE, IPN, ISF, ISR, IVX, IVY, U_AX, process_into, yaw_rate
 from sideslip.vehicle import G
 
 # indices of the loop's configuration vector (filled by sideslip.methods.fused)
@@ -223,10 +226,21 @@ def forward_nodes(
             # about 15-20; race lap: -3.5 % braking at 8 m/s^2, +6 % driving at 5 m/s^2)
             # (a_x the estimated longitudinal acceleration, the reading less the offset c_x);
             # below C_AXLE_MIN_SPEED a slip ratio is as ill-defined as a slip angle (a wheel
-            # pulling away; parking drive: a pull-away with the term had beta 1.1 -> 6.6 deg)
+            # pulling away; parking drive: a pull-away with the term had beta 1.1 -> 6.6 deg).
+            # In corners the driving force also overcomes the front axle's cornering drag and
+            # the slip grows with the rear's secant compliance (combined slip, brush model:
+            # sideslip.methods.fused_updates), where the rear force stands above the axle
+            # relation's noise floor C_FORCE_SIGMA (below it a slip-over-force secant is noise)
             slip = 0.0
             if abs(vw[k]) > cfg[C_AXLE_MIN_SPEED]:
                 slip = abs(u[U_AX] - x[ICX]) / (G * cfg[C_WHEEL_SLIP_STIFFNESS])
+                if abs(f_rear[k]) > cfg[C_FORCE_SIGMA] and x[IVX] > cfg[C_AXLE_MIN_SPEED]:
+                    r_k = yaw_rate(x, u, cfg[C_K_PHI], dr)
+                    slip = wheel_slip_ratio(
+                        u[U_AX] - x[ICX], f_rear[k], (x[IVY] - axle[A_LR] * r_k) / x[IVX],
+                        (x[IVY] + axle[A_LF] * r_k) / x[IVX], axle[A_LR] / axle[A_LF],
+                        cfg[C_WHEEL_SLIP_STIFFNESS],
+                    )  # fmt: skip
             sig_w = cfg[C_WHEEL_SIGMA] + abs(vw[k]) * (cfg[C_WHEEL_REL] + slip)
             d2, ok = _robust(x, P, vw[k] - hv, h, sig_w * sig_w, gate, work)
             nis[k, K_WHEEL] = d2
