@@ -42,7 +42,8 @@ wheel speed's sigma carries the longitudinal slip
 a_x / (g C_k) of braking and driving wheels, in corners with the front axle's cornering drag
 and the combined-slip growth of the compliance (:mod:`sideslip.methods.fused_updates`); a
 stiffness the causal filter withholds in a
-transient enters the axle relation's variance (a consider parameter).  ``beta_std`` adds what
+transient is a consider parameter of the axle relation (Schmidt-Kalman: its variance and
+cross-covariances kept, its gain zero).  ``beta_std`` adds what
 the covariance's white updates cannot carry: the learned stiffness's remaining relative
 uncertainty times the rear slip, the tyres' relaxation lag, and, where nothing but the tyres
 pins the slip (no GNSS; and for the causal filter in every corner, where GNSS cannot tell
