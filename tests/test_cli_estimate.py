@@ -82,3 +82,39 @@ def test_skipped_methods_and_their_reasons_go_to_the_params(tmp_path):
     assert params["_skipped"]["obs_bicycle"] == "drive lacks 'steer'"
     assert "skipped obs_bicycle: drive lacks 'steer'" in res.stderr
     assert "fused" in params and "obs_bicycle" not in params
+
+
+def test_compact_reading_is_said_and_changes_only_the_last_digits(tmp_path):
+    """``--compact`` (the default for drives over LONG_DRIVE_ROWS) holds the sensor channels
+    in float32: a relative rounding of 6e-8 of the inputs, so the estimates move by far less
+    than any method's accuracy (1e-5 rad = 0.0006 deg); the table's metadata says so."""
+    import pyarrow.parquet as pq
+
+    full, small = tmp_path / "full.parquet", tmp_path / "small.parquet"
+    for out, flag in ((full, "--no-compact"), (small, "--compact")):
+        res = invoke("estimate", CIRCLE, "--vehicle", "midsize_sedan", "--method", "kkf", "--method", "obs_bicycle",
+                     flag, "--out", out)  # fmt: skip
+        assert res.exit_code == 0, res.output
+    assert "compact" in invoke("estimate", CIRCLE, "--vehicle", "midsize_sedan", "--method", "kkf", "--compact",
+                               "--out", tmp_path / "x.parquet").output  # fmt: skip
+    a, b = pd.read_parquet(full), pd.read_parquet(small)
+    assert list(a.columns) == list(b.columns)
+    for col in ("kkf.beta", "obs_bicycle.beta", "kkf.yaw"):
+        assert np.abs(a[col] - b[col]).max() < 1e-5, col
+    assert not a.equals(b)  # the inputs were rounded: not silently the same run
+    meta_full = json.loads(pq.read_schema(full).metadata[b"sideslip"])
+    meta_small = json.loads(pq.read_schema(small).metadata[b"sideslip"])
+    assert "inputs" not in meta_full and "single precision" in meta_small["inputs"]
+
+
+def test_long_drives_are_read_compact_by_default(tmp_path, monkeypatch):
+    import sideslip.cli.estimate as cli_estimate
+
+    monkeypatch.setattr(cli_estimate, "LONG_DRIVE_ROWS", 500)  # CIRCLE has 1000 rows
+    out = tmp_path / "e.parquet"
+    res = invoke("estimate", CIRCLE, "--vehicle", "midsize_sedan", "--method", "kkf", "--out", out)
+    assert res.exit_code == 0, res.output
+    assert "read the drive compact" in res.output
+    monkeypatch.setattr(cli_estimate, "LONG_DRIVE_ROWS", 5000)
+    res = invoke("estimate", CIRCLE, "--vehicle", "midsize_sedan", "--method", "kkf", "--out", out)
+    assert res.exit_code == 0 and "compact" not in res.output

@@ -6,10 +6,7 @@ the 12th sample of the table in both CSV and Parquet.
 
 from __future__ import annotations
 
-import csv
-import json
-import re
-from collections.abc import Iterator, Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -17,12 +14,24 @@ from typing import Any
 import numpy as np
 import pandas as pd
 import pyarrow as pa
-import pyarrow.parquet as pq
 from numpy.typing import NDArray
 
 from sideslip.errors import InputError
 from sideslip.frames import geodetic_to_enu
-from sideslip.outputs import atomic_write, output_group
+from sideslip.outputs import atomic_write
+from sideslip.tables import (
+    _READ_ERRORS,
+    REFERENCE_PREFIX,
+    _check_names,
+    _first_row,
+    _parquet_columns,
+    _read_csv,
+    _read_sidecar,
+    _short,
+    _table_path,
+    _unreadable,
+    save_table,
+)
 
 _atomic_write = atomic_write  # the name the other modules import
 
@@ -52,7 +61,6 @@ SINGLE_PRECISION = frozenset(
     ("ax", "ay", "az", "wx", "wy", "wz", "v_fl", "v_fr", "v_rl", "v_rr", "v_can", "steer",
      "gnss_ve", "gnss_vn", "gnss_vu", "gnss_pos_std", "gnss_vel_std")
 )  # fmt: skip
-REFERENCE_PREFIX = "ref_"  # truth columns: for evaluation, never read by a method
 WHEEL_SPEEDS = ("v_fl", "v_fr", "v_rl", "v_rr")
 SPEED_COLUMNS = (*WHEEL_SPEEDS, "v_can")
 # Geodetic input the loader turns into ENU: (lat, lon, h) -> (e, n, u).
@@ -64,9 +72,6 @@ GEODETIC = {
 # Fewest rows a drive may have: every method needs one step of time (two stamps); a one-row
 # table holds no motion and ends in singular least-squares systems.
 MIN_ROWS = 2
-# Longest cell accepted in a table (characters): a longer one is a broken file (a missing line
-# break or closing quote swallowed the rows after it), not a value.
-MAX_CELL_CHARS = 1 << 20
 
 # Evident-unit limits (section 5): |value| beyond the limit means a wrong unit.
 LIMITS: list[tuple[tuple[str, ...], float, str]] = [
@@ -181,74 +186,44 @@ def _stored(name: str, values: np.ndarray) -> np.ndarray:
 # ------------------------------------------------------------------------------------------
 # validation
 # ------------------------------------------------------------------------------------------
-def _first_row(mask: np.ndarray) -> int:
-    return int(np.argmax(mask)) + 1
-
-
-def _short(value: Any, limit: int = 40) -> str:
-    """``repr`` of a cell for a one-line message, cut to ``limit`` characters."""
-    text = repr(value)
-    if len(text) > limit:
-        text = f"{text[: limit - 12]}... ({len(str(value)):,} characters)"
-    return text.replace("\n", " ")
-
-
-def _check_names(names: list[str], path: str) -> None:
-    seen: set[str] = set()
-    for name in names:
-        if name in seen:
-            raise InputError(path, "appears twice: expected each column once (which one holds the "
-                             "data?)", column=name)
-        seen.add(name)
-
-
-def validate_frame(frame: pd.DataFrame, path: str) -> dict[str, np.ndarray]:
+def validate_frame(frame: pd.DataFrame, path: str, store: Store | None = None) -> dict[str, np.ndarray]:
     """Apply contract section 5 to a table; return its columns as arrays.
 
     Raises :class:`InputError` on the first violated rule, naming file, column, row and what
-    was expected.
+    was expected.  ``store``: see :func:`validate_columns`.
     """
-    _check_names([str(c) for c in frame.columns], path)
-    if "t" not in frame.columns:
+    names = [str(c) for c in frame.columns]
+    return validate_columns(names, ((str(c), frame[c]) for c in frame.columns), path, store)
+
+
+# How a validated column is kept: (name, float64 values) -> the array the drive holds.
+Store = Callable[[str, np.ndarray], np.ndarray]
+# Checks made once ``t`` is known to be valid, in this order (the first failing one is named).
+_DEFERRED = [n for names, _, _ in LIMITS for n in names] + ["gnss_pos_std", "gnss_vel_std"]
+
+
+def validate_columns(
+    names: list[str], columns: Iterable[tuple[str, pd.Series]], path: str, store: Store | None = None
+) -> dict[str, np.ndarray]:
+    """:func:`validate_frame` over columns that arrive one at a time (``names``: all of them).
+
+    Each column is checked, turned into its array and passed through ``store`` (e.g. to float32,
+    :func:`_stored`) before the next one is read, so a large file never needs its whole table
+    and its arrays in memory at once.  The range and std checks wait until ``t`` has passed
+    its own, so the error named is the same whatever the column order.
+    """
+    _check_names(names, path)
+    if "t" not in names:
         raise InputError(path, "required column is missing: expected time stamps in s", column="t")
     out: dict[str, np.ndarray] = {}
-    for name in frame.columns:
-        name_s = str(name)
-        series = frame[name]
-        if name_s in COLUMNS or name_s in {c for k in GEODETIC for c in k}:
-            if series.dtype.kind in "bmM":  # a reader's guess of true/false or dates: no number
-                ok = series.notna().to_numpy()
-                raise InputError(
-                    path,
-                    f"expected a number in {COLUMNS.get(name_s, 'deg or m')}, got "
-                    f"{_short(series[ok].iloc[0]) if ok.any() else 'no numbers'}",
-                    column=name_s,
-                    row=_first_row(ok) if ok.any() else None,
-                )
-            values = pd.to_numeric(series, errors="coerce").to_numpy(dtype=float)
-            bad = np.isnan(values) & series.notna().to_numpy()
-            if bad.any():
-                row = _first_row(bad)
-                raise InputError(
-                    path,
-                    f"expected a number in {COLUMNS.get(name_s, 'deg or m')}, got "
-                    f"{_short(series.iloc[row - 1])}",
-                    column=name_s,
-                    row=row,
-                )
-            if np.isinf(values).any():
-                raise InputError(
-                    path,
-                    "expected a finite number or an empty cell, got infinity",
-                    column=name_s,
-                    row=_first_row(np.isinf(values)),
-                )
-            out[name_s] = values
-        else:
-            arr = series.to_numpy()
-            if arr.dtype.kind in "iub":
-                arr = arr.astype(float)
-            out[name_s] = arr
+    deferred: dict[str, InputError] = {}
+    for name_s, series in columns:
+        values = _column_values(name_s, series, path)
+        error = _range_error(name_s, values, path)
+        if error is not None:
+            deferred[name_s] = error
+        out[name_s] = store(name_s, values) if store is not None and name_s != "t" else values
+        del series
     t = out.pop("t")
     if t.size < MIN_ROWS:
         raise InputError(
@@ -267,31 +242,65 @@ def validate_frame(frame: pd.DataFrame, path: str) -> dict[str, np.ndarray]:
             column="t",
             row=i + 2,
         )
+    for name in _DEFERRED:
+        if name in deferred:
+            raise deferred[name]
+    out["t"] = t
+    return out
+
+
+def _column_values(name: str, series: pd.Series, path: str) -> np.ndarray:
+    """One column as an array: a contract column as float64 (numbers, NaN, no inf), any other
+    as read (integers and booleans as float)."""
+    if name not in COLUMNS and name not in {c for k in GEODETIC for c in k}:
+        arr = series.to_numpy()
+        return arr.astype(float) if arr.dtype.kind in "iub" else arr
+    if series.dtype.kind in "bmM":  # a reader's guess of true/false or dates: no number
+        ok = series.notna().to_numpy()
+        raise InputError(
+            path,
+            f"expected a number in {COLUMNS.get(name, 'deg or m')}, got "
+            f"{_short(series[ok].iloc[0]) if ok.any() else 'no numbers'}",
+            column=name,
+            row=_first_row(ok) if ok.any() else None,
+        )
+    values = pd.to_numeric(series, errors="coerce").to_numpy(dtype=float)
+    bad = np.isnan(values) & series.notna().to_numpy()
+    if bad.any():
+        row = _first_row(bad)
+        raise InputError(
+            path,
+            f"expected a number in {COLUMNS.get(name, 'deg or m')}, got {_short(series.iloc[row - 1])}",
+            column=name,
+            row=row,
+        )
+    if np.isinf(values).any():
+        raise InputError(
+            path,
+            "expected a finite number or an empty cell, got infinity",
+            column=name,
+            row=_first_row(np.isinf(values)),
+        )
+    return values
+
+
+def _range_error(name: str, col: np.ndarray, path: str) -> InputError | None:
+    """The evident-unit (:data:`LIMITS`) or negative-std error of one column, if any."""
     for names, limit, what in LIMITS:
-        for name in names:
-            col = out.get(name)
-            if col is None:
-                continue
+        if name in names:
             over = np.abs(np.nan_to_num(col)) > limit
             if over.any():
                 row = _first_row(over)
-                raise InputError(
-                    path,
-                    f"value {col[row - 1]:g} is beyond {limit:g}: expected {what}",
-                    column=name,
-                    row=row,
+                return InputError(
+                    path, f"value {col[row - 1]:g} is beyond {limit:g}: expected {what}", column=name, row=row
                 )
-    for name in ("gnss_pos_std", "gnss_vel_std"):
-        col = out.get(name)
-        if col is not None and (np.nan_to_num(col) < 0).any():
-            raise InputError(
-                path,
-                "expected a standard deviation >= 0",
-                column=name,
-                row=_first_row(np.nan_to_num(col) < 0),
+    if name in ("gnss_pos_std", "gnss_vel_std"):
+        negative = np.nan_to_num(col) < 0
+        if negative.any():
+            return InputError(
+                path, "expected a standard deviation >= 0", column=name, row=_first_row(negative)
             )
-    out["t"] = t
-    return out
+    return None
 
 
 def _geodetic_to_enu(cols: dict[str, np.ndarray], meta: dict[str, Any], path: str) -> None:
@@ -318,143 +327,39 @@ def _geodetic_to_enu(cols: dict[str, np.ndarray], meta: dict[str, Any], path: st
 # ------------------------------------------------------------------------------------------
 # load / save
 # ------------------------------------------------------------------------------------------
-def meta_path(path: Path) -> Path:
-    """Side-car metadata file of a drive table: ``drive.csv`` -> ``drive.meta.json``."""
-    return path.with_name(path.stem + ".meta.json")
-
-
-def _csv_header(p: Path) -> list[str]:
-    """The column names exactly as the CSV's first line spells them (readers rename repeats)."""
-    with open(p, encoding="utf-8", errors="replace", newline="") as fh:
-        line = fh.readline(MAX_CELL_CHARS)
-    try:
-        return next(csv.reader([line]), [])
-    except csv.Error:
-        return []
-
-
-def _check_cells(frame: pd.DataFrame, src: str) -> None:
-    """A text cell longer than :data:`MAX_CELL_CHARS` is a broken file: name its row."""
-    for name in frame.columns:
-        col = frame[name]
-        if col.dtype.kind in "fiubmM":  # numbers and times: no text to measure
-            continue
-        lengths = col.map(lambda v: len(v) if isinstance(v, str) else 0).to_numpy()
-        over = lengths > MAX_CELL_CHARS
-        if over.any():
-            row = _first_row(over)
-            raise InputError(
-                src,
-                f"a cell of {int(lengths[row - 1]):,} characters: expected a value (a missing line "
-                "break or closing quote?)",
-                column=str(name),
-                row=row,
-            )
-
-
-def _read_csv(p: Path, src: str) -> pd.DataFrame:
-    if not p.stat().st_size:
-        return pd.DataFrame()
-    _check_names(_csv_header(p), src)
-    try:
-        frame = pd.read_csv(p, engine="pyarrow")
-    except (ValueError, pa.ArrowException):
-        # pyarrow's fast reader names no row (e.g. a cell longer than its block): read again
-        # with pandas' own parser, which names the line of a malformed row.
-        try:
-            frame = pd.read_csv(p, engine="c", low_memory=False)
-        except (ValueError, UnicodeDecodeError) as exc:
-            text = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-            line = re.search(r"in line (\d+)", text)
-            if line:  # pandas counts file lines from 1 with the header; rows start after it
-                raise InputError(src, f"cannot read as csv: {text}", row=int(line.group(1)) - 1) from None
-            raise
-    _check_cells(frame, src)
-    return frame
-
-
-def _read_parquet(p: Path, src: str, meta: dict[str, Any], reference: bool = True) -> pd.DataFrame:
-    names = [str(n) for n in pq.read_schema(p).names]
-    _check_names(names, src)
-    keep = None if reference else [n for n in names if not n.startswith(REFERENCE_PREFIX)]
-    table = pq.ParquetFile(p).read(columns=keep)
-    kv = table.schema.metadata or {}
-    if b"sideslip" in kv:
-        meta.update(json.loads(kv[b"sideslip"]))
-    frame = table.to_pandas()
-    _check_cells(frame, src)
-    return frame
-
-
-def read_table(path: str | Path, reference: bool = True) -> tuple[pd.DataFrame, dict[str, Any]]:
-    """Read a CSV or Parquet table and its metadata; unreadable files raise InputError.
-
-    Columns named twice and cells too long to be values (:data:`MAX_CELL_CHARS`) are errors
-    naming the column (and row).  ``reference=False`` skips a Parquet file's ``ref_*``
-    columns (a CSV is read whole).
-    """
-    p = Path(path)
-    src = str(path)
-    suffix = p.suffix.lower()
-    if suffix not in (".csv", ".parquet", ".pq"):
-        raise InputError(src, "expected a .csv or .parquet file")
-    if not p.is_file():
-        raise InputError(src, "cannot read: no such file")
-    meta: dict[str, Any] = {}
-    try:
-        frame = _read_csv(p, src) if suffix == ".csv" else _read_parquet(p, src, meta, reference)
-    except (OSError, ValueError, pa.ArrowException, json.JSONDecodeError, UnicodeDecodeError) as exc:
-        first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-        raise InputError(src, f"cannot read as {suffix[1:]}: {first[:200]}") from None
-    side = meta_path(p)
-    if side.is_file():
-        try:
-            extra = json.loads(side.read_text())
-        except (OSError, json.JSONDecodeError, UnicodeDecodeError) as exc:
-            raise InputError(str(side), f"expected JSON metadata ({str(exc)[:200]})") from None
-        if not isinstance(extra, dict):
-            raise InputError(str(side), "expected a JSON object of metadata")
-        meta.update(extra)
-    return frame, meta
-
-
-def load_drive(path: str | Path, compact: bool = False) -> Drive:
+def load_drive(path: str | Path, compact: bool = False, reference: bool | None = None) -> Drive:
     """Load and validate a drive (CSV or Parquet by extension); geodetic columns -> ENU.
 
-    ``compact``: return :meth:`Drive.compact` (what the methods need: no ``ref_*`` columns,
-    sensor channels float32); a Parquet file's reference columns are then not even read.
+    ``compact``: the drive as :meth:`Drive.compact` gives it (sensor channels float32, and no
+    ``ref_*`` columns unless ``reference=True``).  ``reference``: keep the ``ref_*`` truth
+    columns (default: unless ``compact``); a Parquet file's are then not even read.  A Parquet
+    file is read, checked and stored one column at a time, so the peak memory of a load is the
+    drive's arrays plus one column, whatever the drive's length.
     """
-    frame, meta = read_table(path, reference=not compact)
-    cols = validate_frame(frame, str(path))
-    del frame  # memory: the validated arrays are all that is kept
-    _geodetic_to_enu(cols, meta, str(path))
-    t = cols.pop("t")
-    drive = Drive(t=t, data=cols, meta=meta, path=str(path))
-    return drive.compact() if compact else drive
-
-
-def save_table(frame: pd.DataFrame, path: str | Path, meta: Mapping[str, Any] | None = None) -> None:
-    """Write a table (CSV or Parquet by extension) atomically: never half-written.
-
-    Parquet carries ``meta`` as key-value metadata under ``sideslip``; CSV gets a side-car
-    ``<stem>.meta.json``.
-    """
-    p = Path(path)
-    suffix = p.suffix.lower()
-    if suffix not in (".csv", ".parquet", ".pq"):
-        raise InputError(str(path), "expected an output path ending in .csv or .parquet")
-    meta = dict(meta or {})
+    keep_reference = not compact if reference is None else reference
+    store = _stored if compact else None
+    p, src, suffix = _table_path(path)
+    meta: dict[str, Any] = {}
     if suffix == ".csv":
-        with output_group():  # the table and its side-car appear together, or neither
-            atomic_write(p, lambda tmp: frame.to_csv(tmp, index=False, float_format="%.10g"))
-            if meta:
-                atomic_write(meta_path(p), lambda tmp: tmp.write_text(json.dumps(meta, indent=2)))
+        try:
+            frame = _read_csv(p, src)
+        except _READ_ERRORS as exc:
+            raise _unreadable(src, suffix, exc) from None
+        _read_sidecar(p, meta)
+        cols = validate_frame(frame, src, store)
+        del frame  # memory: the validated arrays are all that is kept
     else:
-        table = pa.Table.from_pandas(frame, preserve_index=False)
-        kv = dict(table.schema.metadata or {})
-        kv[b"sideslip"] = json.dumps(meta).encode()
-        table = table.replace_schema_metadata(kv)
-        atomic_write(p, lambda tmp: pq.write_table(table, tmp))
+        names, columns = _parquet_columns(p, src, meta, keep_reference)
+        _read_sidecar(p, meta)
+        cols = validate_columns(names, columns, src, store)
+        # arrow keeps the pages of the columns it decoded for reuse: hand them back, or they
+        # stay resident under the methods (0.3 GB after a 24 h drive)
+        pa.default_memory_pool().release_unused()
+    _geodetic_to_enu(cols, meta, src)
+    if not keep_reference:
+        cols = {k: v for k, v in cols.items() if not k.startswith(REFERENCE_PREFIX)}
+    t = cols.pop("t")
+    return Drive(t=t, data=cols, meta=meta, path=src)
 
 
 def save_drive(drive: Drive, path: str | Path) -> None:

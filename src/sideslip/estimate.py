@@ -13,7 +13,8 @@ import numpy as np
 import pandas as pd
 from numpy.typing import NDArray
 
-from sideslip.drive import _atomic_write, save_table
+from sideslip.drive import _atomic_write
+from sideslip.tables import save_columns
 
 FloatArray = NDArray[np.float64]
 
@@ -159,11 +160,13 @@ def save_estimates(
     report can list it; every other key of the JSON is a method name.
     """
     p = Path(path)
-    frame = estimates_frame(t, estimates)
+    cols: dict[str, Any] = {"t": t}
+    for est in estimates:
+        cols.update({f"{est.method}.{name}": values for name, values in est.series.items()})
     params: dict[str, Any] = {est.method: _jsonable(dict(est.params)) for est in estimates}
     if skipped:
         params[SKIPPED_KEY] = dict(skipped)
-    save_table(frame, p, meta)
+    save_columns(cols, p, meta)  # in slices of rows: no whole-table copy of a long drive
     jp = params_path(p)
     _atomic_write(jp, lambda tmp: tmp.write_text(json.dumps(params, indent=2)))
     return jp
@@ -171,8 +174,8 @@ def save_estimates(
 
 def load_estimates(path: str | Path) -> dict[str, dict[str, FloatArray]]:
     """Read an estimate table back as method -> series -> array (plus '' -> {'t': t})."""
-    from sideslip.drive import read_table
     from sideslip.errors import InputError
+    from sideslip.tables import read_table
 
     frame, _ = read_table(path)
     if "t" not in frame.columns:

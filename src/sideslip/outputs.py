@@ -295,7 +295,7 @@ def table_outputs(path: PathLike) -> list[Path]:
 
     A name that is no table (not .csv/.parquet) is an InputError here, before anything runs.
     """
-    from sideslip.drive import meta_path
+    from sideslip.tables import meta_path
 
     p = Path(path)
     if p.suffix.lower() not in (".csv", ".parquet", ".pq"):

@@ -21,10 +21,12 @@ from tests.conftest import sim_drive
 # and numba's arrays) per extra row: measured between two lengths so that the fixed cost of a
 # run (compiled code, chunk buffers) cancels.  Before the chunked observer matrices, the
 # compact EKF storage, the streamed input health and the graph freed after assembly these
-# methods took 400-560 B/row.
+# methods took 400-560 B/row (mkf 379, mkf_adaptive 392, kkf 302 before the MKF/KKF outputs
+# were formed in place).
 BYTES_PER_ROW_BUDGET = 340.0
 HEAVY = ("obs_modified", "obs_modified_nocomp", "obs_bicycle", "ekf_wss_sas", "ekf_wss_sas_imu",
-         "doppler_slip", "doppler_slip_noroll", "kf_linear", "fg_batch", "fg_lag")  # fmt: skip
+         "doppler_slip", "doppler_slip_noroll", "kf_linear", "fg_batch", "fg_lag",
+         "mkf", "mkf_adaptive", "kkf")  # fmt: skip
 ROWS = (60_000, 180_000)
 
 
@@ -47,17 +49,7 @@ def _peak_bytes(name, drive, vehicle):
     return peak
 
 
-# measured after merging the compiled graph assembly (fg speed work) over the graph-freeing
-# memory work: the graph's sigmas and weights are both held (427 B/row for fg_batch); issue 17
-# stays open for these two until the graph keeps only its weights
-OVER_BUDGET = {"fg_batch": 427, "kf_linear": 395}
-
-
-@pytest.mark.parametrize(
-    "name",
-    [pytest.param(n, marks=pytest.mark.xfail(strict=True, reason=f"{OVER_BUDGET[n]} B/row measured"))
-     if n in OVER_BUDGET else n for n in HEAVY],
-)  # fmt: skip
+@pytest.mark.parametrize("name", HEAVY)
 def test_heavy_method_peak_memory_per_row_fits_a_day_long_drive_in_4_gb(long_drive, name):
     drive, vehicle = long_drive
     run_method(name, drive.slice(0, 6000), vehicle)  # compile and warm caches first

@@ -10,6 +10,11 @@ import typer
 from sideslip.cli.app import app, guarded
 from sideslip.errors import InputError
 
+# Drives longer than this (rows; 5.6 h at 100 Hz) are read compact by default: the sensor
+# channels in single precision (:meth:`sideslip.drive.Drive.compact`, a relative rounding of
+# 6e-8, far below any sensor's noise), so a day-long drive and a method fit in 4 GB.
+LONG_DRIVE_ROWS = 2_000_000
+
 
 def settings_from_cli(config: Path | None, assignments: list[str] | None) -> dict[str, Any]:
     """Method -> settings object from ``--config FILE`` then ``--set M.FIELD=VALUE`` (which wins).
@@ -110,11 +115,21 @@ def estimate_cmd(
     geodetic: Annotated[
         bool, typer.Option("--geodetic", help="Also write M.lat, M.lon (deg) from the drive's origin.")
     ] = False,
+    compact: Annotated[
+        bool | None,
+        typer.Option(
+            "--compact/--no-compact",
+            help="Hold the sensor channels in single precision (default: for drives over "
+            f"{LONG_DRIVE_ROWS:,} rows, so a day at 100 Hz fits a few GB).",
+        ),
+    ] = None,
 ) -> None:
     """Run estimation methods on a drive and write their estimates (+ .params.json)."""
-    from sideslip.drive import load_drive, meta_path
+    set_compact = compact
+    from sideslip.drive import load_drive
     from sideslip.estimate import save_estimates
     from sideslip.outputs import check_outputs, estimate_outputs, output_group
+    from sideslip.tables import meta_path, table_rows
     from sideslip.vehicle import load_vehicle
 
     if out.suffix.lower() not in (".csv", ".parquet", ".pq"):
@@ -130,15 +145,26 @@ def estimate_cmd(
     check_outputs(estimate_outputs(out), [drive_path, meta_path(drive_path), vehicle, config])
     chosen_settings = settings_from_cli(config, set_)
     veh = load_vehicle(vehicle)
-    drive = load_drive(drive_path)
+    if compact is None:
+        rows = table_rows(drive_path)
+        compact = rows is not None and rows > LONG_DRIVE_ROWS
+    # The methods never read the ref_* truth columns: they are not even loaded.
+    drive = load_drive(drive_path, compact=compact, reference=False)
+    if not compact and len(drive) > LONG_DRIVE_ROWS and set_compact is None:
+        drive = drive.compact()  # a long CSV (its length is known only once read)
+        compact = True
     if geodetic:
         from sideslip.conventions import drive_origin
 
         drive_origin(drive)  # fails before any method runs
     result = run_estimates(drive, veh, method, settings=chosen_settings)
     estimates = with_conventions(drive, list(result), heading_convention, geodetic)  # type: ignore[arg-type]
+    t, skipped = drive.t, result.skipped
+    del drive, result  # memory: only the estimates are written
+    meta: dict[str, Any] = {"drive": str(drive_path), "vehicle": vehicle}
+    if compact:
+        meta["inputs"] = "compact drive: sensor channels held in single precision"
+        note("read the drive compact (sensor channels in single precision)")
     with output_group():  # the table and its .params.json appear together, or neither
-        params = save_estimates(
-            drive.t, estimates, out, {"drive": str(drive_path), "vehicle": vehicle}, result.skipped
-        )
+        params = save_estimates(t, estimates, out, meta, skipped)
     note(f"wrote {out} ({len(estimates)} methods) and {params}")

@@ -295,7 +295,7 @@ Channel = tuple[FloatArray, np.ndarray, IntArray]
 
 class _Csv:
     def __init__(self, path: str, smap: SourceMap) -> None:
-        from sideslip.drive import _check_cells, _check_names, _csv_header
+        from sideslip.tables import _check_cells, _check_names, _csv_header
 
         self.path = path
         try:
@@ -397,7 +397,7 @@ def _numbers(values: np.ndarray, path: str, channel: str, what: str,
 
     Empty cells (NaN) stay NaN: a sensor without a sample there.
     """
-    from sideslip.drive import _short
+    from sideslip.tables import _short
 
     if values.dtype.kind in "fiub":
         out = values.astype(float)

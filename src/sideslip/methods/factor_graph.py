@@ -40,6 +40,9 @@ for row k, the exact posterior mean and 1-sigma of x_k given all data up to row 
 with window = 0 it is the Kalman filter, with window >= N - 1 the batch smoother (both
 tested).  On-line this is an output delay of window x dt (50 ms at 100 Hz).  The drive is
 streamed in chunks of ``LAG_CHUNK`` rows, so the working memory does not grow with the drive.
+Memory: no method holds the whole drive's factors.  The tuning, the batch assembly and the
+Kalman filter build the graph in chunks of ``GRAPH_CHUNK`` rows (bit-identical to the whole
+graph at once); fg_batch keeps only the banded normal equations (64 B/row) and its outputs.
 Both use the same settings here (the paper tuned its KF and FG differently, its Section 4).
 
 Noise settings (:class:`~sideslip.methods.fg_settings.FactorGraphSettings`, in its own module):
@@ -77,6 +80,7 @@ them and the 1-sigma grows.
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from dataclasses import asdict, dataclass, replace
 from functools import cached_property
 
@@ -85,17 +89,19 @@ from numpy.typing import NDArray
 
 from sideslip.drive import Drive
 from sideslip.estimate import Estimate
-from sideslip.filters.banded import assemble_chain, fixed_lag_chain, selected_inverse, solve_chain
-from sideslip.methods.fg_kernels import chain_factors, one_sigma
+from sideslip.filters.banded import fixed_lag_chain, solve_chain
+from sideslip.methods.fg_kernels import add_chain_factors, band_marginals, chain_factors, one_sigma
 from sideslip.methods.fg_settings import DEFAULT_SETTINGS, FactorGraphSettings
 from sideslip.methods.fg_tuning import (
     BLOCK_S,
     SIGMA_FIELDS,
     WINDOW_S,
     Tuning,
+    UnitChunk,
     block_consistency,
     chain_innovations,
     chain_kalman,
+    chain_kalman_into,
     choose_sigmas,
 )
 from sideslip.methods.registry import SPEED, register
@@ -110,6 +116,9 @@ VEHICLE_PARAMS = ("mass", "yaw_inertia", "lf", "lr", "cf", "cr")
 
 
 LAG_CHUNK = 4096  # rows per chunk of the streamed fixed-lag smoother
+# rows per chunk of the graph built at once by the tuning, the batch assembly and the filter
+# (the graph is never held for the whole drive: ~250 B/row of factors and weights)
+GRAPH_CHUNK = 16384
 
 
 @dataclass(frozen=True)
@@ -157,8 +166,8 @@ class GraphInputs:
     ``delta`` held road-wheel angle (rad); ``v_dynamics`` and ``v_measurement`` the speeds
     (m/s) used in the dynamic and the a_y factors (clamped, module docstring); ``low_speed``
     rows below the speed gate or reversing; ``time_gap`` steps longer than ``max_step``
-    (length N - 1); ``wz`` and ``ay`` the raw samples (NaN where the sensor has no fresh
-    sample).
+    (length N - 1); ``wz`` and ``ay`` the raw samples as the drive stores them (float32 in a
+    compact drive, float64 otherwise; NaN where the sensor has no fresh sample).
     """
 
     t: FloatArray
@@ -167,8 +176,14 @@ class GraphInputs:
     v_measurement: FloatArray
     time_gap: NDArray[np.bool_]
     low_speed: NDArray[np.bool_]
-    wz: FloatArray
-    ay: FloatArray
+    wz: NDArray[np.floating]
+    ay: NDArray[np.floating]
+
+
+def _as_stored_float(values: object) -> NDArray[np.floating]:
+    """A column as stored when it is float32 or float64, else as float64."""
+    arr = np.asarray(values)
+    return arr if arr.dtype in (np.float32, np.float64) else arr.astype(float)
 
 
 def graph_inputs(
@@ -189,7 +204,10 @@ def graph_inputs(
     dt_row = np.append(np.where(gap, 0.0, dt), 0.0)
     v_measurement = np.maximum(speed, settings.speed_gate)
     v_dynamics = np.maximum(v_measurement, dt_row * stiff)
-    return GraphInputs(t, delta, v_dynamics, v_measurement, gap, low, drive["wz"], drive["ay"])
+    # the sensor samples as stored (float32 in a compact drive): the compiled factor pass reads
+    # each one into double precision exactly, so no float64 copy of the drive is kept
+    wz, ay = (_as_stored_float(drive.data[k]) for k in ("wz", "ay"))
+    return GraphInputs(t, delta, v_dynamics, v_measurement, gap, low, wz, ay)
 
 
 def build_graph(
@@ -235,13 +253,15 @@ def build_graph(
 
 @dataclass(frozen=True)
 class Prepared:
-    """A drive ready to solve: inputs, settings with every sigma resolved, how they were chosen,
-    and the graph when the tuning already built it."""
+    """A drive ready to solve: inputs, settings with every sigma resolved and how they were
+    chosen.  ``unit_scaled``: the tuning searched the sigmas on the graph built with unit
+    sigmas, and the graph is built that way and rescaled (:func:`_reweighted`), exactly as
+    the tuning saw it."""
 
     inputs: GraphInputs
     settings: FactorGraphSettings
     tuning: Tuning
-    graph: SideslipGraph | None
+    unit_scaled: bool
 
 
 def _reweighted(unit: SideslipGraph, s: FactorGraphSettings, gap: NDArray[np.bool_]) -> SideslipGraph:
@@ -257,51 +277,145 @@ def _reweighted(unit: SideslipGraph, s: FactorGraphSettings, gap: NDArray[np.boo
 
 
 def prepare(
-    drive: Drive, vehicle: Vehicle, settings: FactorGraphSettings = DEFAULT_SETTINGS,
-    keep_graph: bool = True,
+    drive: Drive, vehicle: Vehicle, settings: FactorGraphSettings = DEFAULT_SETTINGS
 ) -> Prepared:
     """Inputs of ``drive`` and the sigmas of ``settings``: from the preset or set, or, for
-    "auto", identified from the drive (:func:`sideslip.methods.fg_tuning.choose_sigmas`);
-    with ``keep_graph`` the whole graph the tuning built, reweighted (fg_lag, which builds its
-    own chunks, does not keep it)."""
+    "auto", identified from the drive (:func:`sideslip.methods.fg_tuning.choose_sigmas`, on
+    the unit-sigma graph built chunk by chunk: nothing of the graph is kept)."""
     inputs = graph_inputs(drive, vehicle, settings)
     fixed = settings.fixed_sigmas()
     if all(v is not None for v in fixed.values()):
         label = "set" if settings.preset == "auto" else f"{settings.preset} preset"
         source = {k: ("set" if getattr(settings, k) is not None else label) for k in fixed}
         values = {k: float(v) for k, v in fixed.items() if v is not None}
-        return Prepared(inputs, settings.with_sigmas(values), Tuning(values, source, None, []), None)
+        return Prepared(inputs, settings.with_sigmas(values), Tuning(values, source, None, []), False)
     unit_settings = settings.with_sigmas(dict.fromkeys(SIGMA_FIELDS, 1.0))
-    unit = build_graph(inputs, vehicle, unit_settings)
+
+    def unit_chunks(look_ahead: int) -> Iterator[UnitChunk]:
+        n = inputs.t.size
+        for a in range(0, n, GRAPH_CHUNK):
+            b = min(a + GRAPH_CHUNK, n)
+            unit = build_graph(inputs, vehicle, unit_settings, a, min(b + look_ahead, n))
+            yield a, b - a, unit.F, unit.g, unit.wq, unit.Hu, unit.zu, unit.wu
+
     dt = float(np.median(np.diff(inputs.t))) if inputs.t.size > 1 else settings.reference_dt
-    tuning = choose_sigmas(
-        fixed, unit.F, unit.g, unit.wq, unit.Hu, unit.zu, unit.wu, unit.x0,
-        np.diag(unit.sigma0**2), dt, ~inputs.low_speed, inputs.time_gap,
-    )  # fmt: skip
-    resolved = settings.with_sigmas(tuning.sigmas)
-    graph = _reweighted(unit, resolved, inputs.time_gap) if keep_graph else None
-    return Prepared(inputs, resolved, tuning, graph)
+    sigma0 = np.array([settings.prior_beta, settings.prior_yaw_rate])
+    tuning = choose_sigmas(fixed, unit_chunks, np.zeros(2), np.diag(sigma0**2), dt,
+                           ~inputs.low_speed, inputs.time_gap)  # fmt: skip
+    return Prepared(inputs, settings.with_sigmas(tuning.sigmas), tuning, tuning.criterion is not None)
 
 
 def sideslip_graph(
     drive: Drive, vehicle: Vehicle, settings: FactorGraphSettings = DEFAULT_SETTINGS
 ) -> SideslipGraph:
-    """The whole seed-002 graph of ``drive`` (used by fg_batch, kf_linear and the peers)."""
+    """The whole seed-002 graph of ``drive`` (the peers; the methods build it in chunks)."""
     return _graph(prepare(drive, vehicle, settings), vehicle)
 
 
-def _graph(prep: Prepared, vehicle: Vehicle) -> SideslipGraph:
-    return prep.graph if prep.graph is not None else build_graph(prep.inputs, vehicle, prep.settings)
+def _graph(prep: Prepared, vehicle: Vehicle, start: int = 0, stop: int | None = None) -> SideslipGraph:
+    """The graph of rows ``start .. stop-1`` with the prepared sigmas (the unit-sigma graph
+    rescaled when the tuning chose them on it: the same numbers as the tuning's graph)."""
+    if not prep.unit_scaled:
+        return build_graph(prep.inputs, vehicle, prep.settings, start, stop)
+    unit = build_graph(prep.inputs, vehicle, prep.settings.with_sigmas(dict.fromkeys(SIGMA_FIELDS, 1.0)),
+                       start, stop)  # fmt: skip
+    return _reweighted(unit, prep.settings, prep.inputs.time_gap[start : start + unit.F.shape[0]])
+
+
+def _chunks(
+    prep: Prepared, vehicle: Vehicle, chunk: int = GRAPH_CHUNK
+) -> Iterator[tuple[int, int, int, SideslipGraph]]:
+    """``(a, b, lo, graph)`` for consecutive chunks of rows a .. b-1: the graph of rows
+    lo = max(a - 1, 0) .. b (one row either side where the drive has it: the dynamic factor
+    into row a and the one out of row b - 1)."""
+    n = prep.inputs.t.size
+    for a in range(0, n, chunk):
+        b = min(a + chunk, n)
+        lo = max(a - 1, 0)
+        yield a, b, lo, _graph(prep, vehicle, lo, min(b + 1, n))
 
 
 def solve_batch(graph: SideslipGraph) -> tuple[FloatArray, FloatArray, FloatArray]:
     """Batch solution: ``(x, var, cov)``: (N, 2) means and marginal variances and the (N,)
     beta-r covariance of each row; one banded Cholesky + selected inverse."""
+    n = graph.Hu.shape[0]
     lam0, eta0 = graph.prior_information
-    ab, rhs = assemble_chain(graph.F, graph.g, graph.wq, graph.Hu, graph.zu, graph.wu, lam0, eta0)
+    ab, rhs = _prior_band(n, lam0, eta0)
+    add_chain_factors(ab, rhs, graph.F, graph.g, graph.wq, graph.Hu, graph.zu, graph.wu, 0, 0)
+    return _solve_band(ab, rhs)
+
+
+def _prior_band(n: int, lam0: FloatArray, eta0: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Zero normal equations of an n-state chain (2 states each) holding the prior on x_0."""
+    ab = np.zeros((4, 2 * n))
+    rhs = np.zeros(2 * n)
+    for i in range(2):
+        rhs[i] += eta0[i]
+        for j in range(i + 1):
+            ab[i - j, j] += lam0[i, j]
+    return ab, rhs
+
+
+def _solve_band(ab: FloatArray, rhs: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Means, marginal variances and beta-r covariances from the normal equations, which
+    the banded Cholesky and the substitutions overwrite (no copies)."""
     x, cb = solve_chain(ab, rhs, overwrite=True)
-    sb = selected_inverse(cb)
-    return x.reshape(-1, 2), sb[0].reshape(-1, 2), sb[1].reshape(-1, 2)[:, 0].copy()
+    var, cov = band_marginals(cb, 2)
+    return x.reshape(-1, 2), var, cov
+
+
+def _batch_pass(
+    prep: Prepared, vehicle: Vehicle, with_innovations: bool, chunk: int = GRAPH_CHUNK
+) -> tuple[FloatArray, FloatArray, FloatArray, tuple[FloatArray, FloatArray] | None]:
+    """:func:`solve_batch` of the prepared graph assembled chunk by chunk (bit-identical,
+    :func:`sideslip.methods.fg_kernels.add_chain_factors`), with ``with_innovations`` the
+    graph's Kalman innovations of the gyro and a_y factors from the same chunks (the numbers
+    of one :func:`~sideslip.methods.fg_tuning.chain_innovations` pass): the normal equations
+    (64 B/row) are the only whole-drive array besides the outputs."""
+    n = prep.inputs.t.size
+    s = prep.settings
+    sigma0 = np.array([s.prior_beta, s.prior_yaw_rate])
+    lam0 = np.diag(1.0 / sigma0**2)
+    ab, rhs = _prior_band(n, lam0, lam0 @ np.zeros(2))
+    nu = np.full((n, 2), np.nan) if with_innovations else np.zeros((0, 2))
+    S = np.full((n, 2), np.nan) if with_innovations else np.zeros((0, 2))
+    x_kf, P_kf = np.zeros(2), np.diag(sigma0**2)
+    for a, b, lo, graph in _chunks(prep, vehicle, chunk):
+        add_chain_factors(ab, rhs, graph.F[: b - 1 - lo], graph.g, graph.wq, graph.Hu[: b - lo],
+                          graph.zu, graph.wu, lo, a - lo)  # fmt: skip
+        if with_innovations:  # the filter's prediction carries across the chunk boundary
+            o, m = a - lo, b - a
+            nu[a:b], S[a:b], x_kf, P_kf = chain_innovations(
+                graph.F[o : o + m], graph.g[o : o + m], graph.wq[o : o + m], graph.Hu[o : o + m],
+                graph.zu[o : o + m], graph.wu[o : o + m], x_kf, P_kf, 2,
+            )  # fmt: skip
+    x, var, cov = _solve_band(ab, rhs)
+    return x, var, cov, ((nu, S) if with_innovations else None)
+
+
+def _kalman_pass(
+    prep: Prepared, vehicle: Vehicle, with_innovations: bool, chunk: int = GRAPH_CHUNK
+) -> tuple[FloatArray, FloatArray, FloatArray, tuple[FloatArray, FloatArray] | None]:
+    """:func:`solve_kalman` of the prepared graph, built and filtered chunk by chunk (the
+    prediction carries across the boundaries: bit-identical); the innovations and S of the
+    gyro and a_y factors only with ``with_innovations``."""
+    n = prep.inputs.t.size
+    s = prep.settings
+    x = np.zeros((n, 2))
+    var = np.zeros((n, 2))
+    cov = np.zeros(n)
+    n_keep = 2 if with_innovations else 0
+    nu = np.full((n, n_keep), np.nan)
+    S = np.full((n, n_keep), np.nan)
+    x_kf, P_kf = np.zeros(2), np.diag(np.array([s.prior_beta, s.prior_yaw_rate]) ** 2)
+    for a, b, lo, graph in _chunks(prep, vehicle, chunk):
+        o, m = a - lo, b - a
+        chain_kalman_into(
+            graph.F[o : o + m], graph.g[o : o + m], graph.wq[o : o + m], graph.Hu[o : o + m],
+            graph.zu[o : o + m], graph.wu[o : o + m], x_kf, P_kf, x[a:b], var[a:b], cov[a:b],
+            nu[a:b], S[a:b],
+        )  # fmt: skip
+    return x, var, cov, ((nu, S) if with_innovations else None)
 
 
 def solve_lag(
@@ -422,16 +536,6 @@ def _estimate(
     return Estimate(name, drive.t, out, params, inn)
 
 
-def _filter_innovations(
-    graph: SideslipGraph, settings: FactorGraphSettings
-) -> tuple[FloatArray, FloatArray] | None:
-    if not settings.consistency:
-        return None
-    nu, S, _, _ = chain_innovations(graph.F, graph.g, graph.wq, graph.Hu, graph.zu, graph.wu,
-                                    graph.x0, np.diag(graph.sigma0**2), 2)  # fmt: skip
-    return nu, S
-
-
 @register(
     "fg_batch",
     columns=COLUMNS,
@@ -445,10 +549,9 @@ def fg_batch(
 ) -> Estimate:
     """Batch factor-graph smoother of the whole drive (module docstring), O(N)."""
     prep = prepare(drive, vehicle, settings)
-    graph = _graph(prep, vehicle)
-    x, var, cov = solve_batch(graph)
-    return _estimate("fg_batch", drive, prep, _filter_innovations(graph, settings), x, var, cov,
-                     settings, False, {"solver": "banded Cholesky"}, vehicle)  # fmt: skip
+    x, var, cov, inn = _batch_pass(prep, vehicle, settings.consistency)
+    return _estimate("fg_batch", drive, prep, inn, x, var, cov, settings, False,
+                     {"solver": "banded Cholesky"}, vehicle)  # fmt: skip
 
 
 @register(
@@ -465,7 +568,7 @@ def fg_lag(
     """Fixed-lag factor-graph smoother: each row's state from the data up to ``window`` rows
     later (an on-line delay of window x dt), oldest state marginalised into the next prior.
     The "auto" sigmas are identified off-line from the whole drive (module fg_tuning)."""
-    prep = prepare(drive, vehicle, settings, keep_graph=False)
+    prep = prepare(drive, vehicle, settings)
     x, var, cov, inn = _lag_pass(prep.inputs, vehicle, prep.settings, LAG_CHUNK, settings.consistency)
     return _estimate(
         "fg_lag", drive, prep, inn, x, var, cov, settings, True,
@@ -486,7 +589,6 @@ def kf_linear(
 ) -> Estimate:
     """Linear Kalman filter with F = I + dt A, Q = diag(model sigmas^2), R = factor sigmas^2."""
     prep = prepare(drive, vehicle, settings)
-    x, var, cov, nu, S = solve_kalman(_graph(prep, vehicle))
-    inn = (nu, S) if settings.consistency else None
+    x, var, cov, inn = _kalman_pass(prep, vehicle, settings.consistency)
     return _estimate("kf_linear", drive, prep, inn, x, var, cov, settings, True,
                      {"filter": "Joseph form"}, vehicle)  # fmt: skip

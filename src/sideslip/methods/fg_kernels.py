@@ -26,8 +26,8 @@ def chain_factors(
     delta: FloatArray,
     low: NDArray[np.bool_],
     gap: NDArray[np.bool_],
-    wz: FloatArray,
-    ay: FloatArray,
+    wz: NDArray[np.floating],
+    ay: NDArray[np.floating],
     sigmas: FloatArray,
     reference_dt: float,
     low_speed_inflation: float,
@@ -130,3 +130,96 @@ def one_sigma(
         beta_std[k] = np.sqrt(vb)
         r_std[k] = np.sqrt(vr)
     return beta_std, r_std
+
+
+@numba.njit(cache=True)
+def add_chain_factors(
+    ab: FloatArray,
+    rhs: FloatArray,
+    F: FloatArray,
+    g: FloatArray,
+    wq: FloatArray,
+    Hu: FloatArray,
+    zu: FloatArray,
+    wu: FloatArray,
+    first_state: int,
+    first_unary: int,
+) -> None:
+    """Add one chunk of the chain factors to the banded normal equations ``ab``, ``rhs`` of
+    the whole chain (layout and arithmetic of :func:`sideslip.filters.banded.assemble_chain`,
+    without the prior, which the caller adds first).
+
+    Local row k is state ``first_state + k``; the unary factors of the rows from
+    ``first_unary`` on and every dynamic factor of ``F`` (k to k + 1) are added.  A chunk that
+    adds the unary factors of states a .. b-1 and the dynamic factors a-1 .. b-2 (those into
+    its states) adds to each entry in the same order as one assembly of the whole chain (the
+    unary factors of a state, then the dynamic factor into it, then the one out of it), so
+    the sums are bit-identical however the chain is chunked.
+    """
+    N = Hu.shape[0]
+    M = Hu.shape[1]
+    nx = Hu.shape[2]
+    for k in range(first_unary, N):
+        o = (first_state + k) * nx
+        for m in range(M):
+            w = wu[k, m]
+            if w == 0.0:
+                continue
+            for i in range(nx):
+                hi = Hu[k, m, i]
+                rhs[o + i] += w * hi * zu[k, m]
+                for j in range(i + 1):
+                    ab[i - j, o + j] += w * hi * Hu[k, m, j]
+    for k in range(F.shape[0]):
+        o = (first_state + k) * nx
+        o1 = o + nx
+        for c in range(nx):
+            w = wq[k, c]
+            for i in range(nx):
+                fi = F[k, c, i]
+                rhs[o + i] -= w * fi * g[k, c]
+                for j in range(i + 1):
+                    ab[i - j, o + j] += w * fi * F[k, c, j]
+                ab[o1 + c - (o + i), o + i] -= w * fi
+            ab[0, o1 + c] += w
+            rhs[o1 + c] += w * g[k, c]
+
+
+@numba.njit(cache=True)
+def band_marginals(cb: FloatArray, nx: int) -> tuple[FloatArray, FloatArray]:
+    """Marginal variances (N, nx) and the covariance of each state's first two components
+    (N,) from the lower Cholesky band ``cb`` of the chain's normal matrix: the Takahashi
+    recursion of :func:`sideslip.filters.banded.selected_inverse` with the same arithmetic,
+    keeping only the p + 1 columns of the inverse's band it still reads (a ring) instead of
+    the whole band, so the memory is that of the outputs."""
+    p = cb.shape[0] - 1
+    n = cb.shape[1]
+    w = p + 1
+    ring = np.zeros((p + 1, w))  # ring[d, col % w] = S[col + d, col]
+    var = np.empty((n // nx, nx))
+    cov = np.empty(n // nx)
+    for j in range(n - 1, -1, -1):
+        m = min(p, n - 1 - j)
+        ljj = cb[0, j]
+        col = j % w
+        for a in range(1, m + 1):
+            i = j + a
+            s = 0.0
+            for c in range(1, m + 1):
+                k = j + c
+                if i >= k:
+                    sik = ring[i - k, k % w]
+                else:
+                    sik = ring[k - i, i % w]
+                s += cb[c, j] * sik
+            ring[a, col] = -s / ljj
+        for a in range(m + 1, p + 1):
+            ring[a, col] = 0.0
+        s = 0.0
+        for c in range(1, m + 1):
+            s += cb[c, j] * ring[c, col]
+        ring[0, col] = 1.0 / (ljj * ljj) - s / ljj
+        var[j // nx, j % nx] = ring[0, col]
+        if j % nx == 0:
+            cov[j // nx] = ring[1, col]
+    return var, cov

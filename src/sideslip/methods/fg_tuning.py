@@ -33,7 +33,7 @@ window's NIS exceeds its chi^2 bound, and ``health``).
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
 
 import numba
@@ -171,15 +171,46 @@ def chain_kalman(
     n = Hu.shape[0]
     M = Hu.shape[1]
     nx = Hu.shape[2]
-    x = x0.copy()
-    P = P0.copy()
-    Q = np.zeros((nx, nx))
-    work = np.empty((2 * nx + 2, nx))
     xs = np.zeros((n, nx))
     vs = np.zeros((n, nx))
     cs = np.zeros(n)
     nu = np.full((n, M), np.nan)
     ss = np.full((n, M), np.nan)
+    chain_kalman_into(F, g, wq, Hu, zu, wu, x0.copy(), P0.copy(), xs, vs, cs, nu, ss)
+    return xs, vs, cs, nu, ss
+
+
+@numba.njit(cache=True)
+def chain_kalman_into(
+    F: FloatArray,
+    g: FloatArray,
+    wq: FloatArray,
+    Hu: FloatArray,
+    zu: FloatArray,
+    wu: FloatArray,
+    x: FloatArray,
+    P: FloatArray,
+    xs: FloatArray,
+    vs: FloatArray,
+    cs: FloatArray,
+    nu: FloatArray,
+    ss: FloatArray,
+) -> None:
+    """:func:`chain_kalman` of the rows of ``Hu`` into the given outputs (filtered means and
+    variances (N, 2), covariance (N,); innovations and S (N, <= M), of the first ``nu.shape[1]``
+    factors, left untouched where a factor is absent: fill them with NaN first).
+
+    ``x``, ``P``: the prediction at the first row, updated in place to the prediction for the
+    row after the last when ``F`` holds that step (``F.shape[0] >= N``: a chunk of a longer
+    chain, continued by the next call; the same arithmetic as one call over the whole chain),
+    else to the last row's filtered state.
+    """
+    n = Hu.shape[0]
+    M = Hu.shape[1]
+    nx = Hu.shape[2]
+    n_keep = nu.shape[1]
+    Q = np.zeros((nx, nx))
+    work = np.empty((2 * nx + 2, nx))
     for k in range(n):
         for m in range(M):
             w = wu[k, m]
@@ -188,17 +219,18 @@ def chain_kalman(
             innov = zu[k, m]
             for i in range(nx):
                 innov -= Hu[k, m, i] * x[i]
-            ss[k, m] = update_scalar_ws_nb(x, P, innov, Hu[k, m], 1.0 / w, work)
-            nu[k, m] = innov
+            s = update_scalar_ws_nb(x, P, innov, Hu[k, m], 1.0 / w, work)
+            if m < n_keep:
+                ss[k, m] = s
+                nu[k, m] = innov
         for i in range(nx):
             xs[k, i] = x[i]
             vs[k, i] = P[i, i]
         cs[k] = P[0, 1]
-        if k < n - 1:
+        if k < F.shape[0]:
             for i in range(nx):
                 Q[i, i] = 1.0 / wq[k, i]
             predict_ws_nb(x, P, F[k], Q, g[k], work)
-    return xs, vs, cs, nu, ss
 
 
 @numba.njit(cache=True)
@@ -273,24 +305,59 @@ def gyro_prediction_errors(
     across a time gap) by ``beta_scale[c]``, i.e. sigma^2 times the unit weights; each
     candidate's arithmetic is exactly that of its own :func:`gyro_prediction_error` run.
     Returns per candidate (sum of squared errors, count, sum of errors)."""
-    n = Hu.shape[0]
-    M = Hu.shape[1]
-    nx = Hu.shape[2]
     n_cand = ay_scale.size
+    nx = Hu.shape[2]
     xs = np.empty((n_cand, nx))
     Ps = np.empty((n_cand, nx, nx))
     for c in range(n_cand):
         xs[c] = x0
         Ps[c] = P0
-    Q = np.zeros((nx, nx))
-    work = np.empty((2 * nx + 2, nx))
-    y = np.zeros(nx)
     sse = np.zeros(n_cand)
     se = np.zeros(n_cand)
     count = np.zeros(n_cand, dtype=np.int64)
-    for k in range(n):
+    gyro_prediction_errors_into(F, g, wq, Hu, zu, wu, Hu.shape[0], 0, horizon, stride, score, gap,
+                                ay_scale, beta_scale, xs, Ps, sse, count, se)  # fmt: skip
+    return sse, count, se
+
+
+@numba.njit(cache=True)
+def gyro_prediction_errors_into(
+    F: FloatArray,
+    g: FloatArray,
+    wq: FloatArray,
+    Hu: FloatArray,
+    zu: FloatArray,
+    wu: FloatArray,
+    rows: int,
+    first_row: int,
+    horizon: int,
+    stride: int,
+    score: NDArray[np.bool_],
+    gap: NDArray[np.bool_],
+    ay_scale: FloatArray,
+    beta_scale: FloatArray,
+    xs: FloatArray,
+    Ps: FloatArray,
+    sse: FloatArray,
+    count: NDArray[np.int64],
+    se: FloatArray,
+) -> None:
+    """:func:`gyro_prediction_errors` over the first ``rows`` rows of a chunk of the chain
+    that starts at row ``first_row`` of the drive (for the stride) and holds ``horizon`` rows
+    of look-ahead after them unless it ends the drive; the candidates' filter states ``xs``
+    (n_cand, nx), ``Ps`` (n_cand, nx, nx) carry from one chunk to the next and the sums
+    ``sse``, ``count``, ``se`` accumulate (in place).  Chunk by chunk, the arithmetic is
+    that of one call over the whole chain."""
+    n = Hu.shape[0]
+    M = Hu.shape[1]
+    nx = Hu.shape[2]
+    n_cand = ay_scale.size
+    Q = np.zeros((nx, nx))
+    work = np.empty((2 * nx + 2, nx))
+    y = np.zeros(nx)
+    for k in range(rows):
         e = k + horizon
-        predict_here = k % stride == 0 and e < n and wu[e, 0] != 0.0 and score[e]
+        predict_here = (first_row + k) % stride == 0 and e < n and wu[e, 0] != 0.0 and score[e]
         across_gap = False
         if predict_here:
             for j in range(k, e):
@@ -326,17 +393,16 @@ def gyro_prediction_errors(
                 for i in range(1, nx):
                     Q[i, i] = 1.0 / wq[k, i]
                 predict_ws_nb(x, P, F[k], Q, g[k], work)
-    return sse, count, se
+
+
+# One chunk of the unit-sigma graph for :func:`choose_sigmas`: (first row of the drive, rows
+# to score, F, g, wq_unit, Hu, zu, wu_unit) with the look-ahead rows after the scored ones.
+UnitChunk = tuple[int, int, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]
 
 
 def choose_sigmas(
     fixed: Mapping[str, float | None],
-    F: FloatArray,
-    g: FloatArray,
-    wq_unit: FloatArray,
-    Hu: FloatArray,
-    zu: FloatArray,
-    wu_unit: FloatArray,
+    unit_chunks: Callable[[int], Iterable[UnitChunk]],
     x0: FloatArray,
     P0: FloatArray,
     dt: float,
@@ -346,10 +412,12 @@ def choose_sigmas(
     """The "auto" sigmas (module docstring) for one drive.
 
     ``fixed`` maps each sigma field to a value set by the user (kept) or None (identified or
-    from the physics preset).  ``wq_unit`` / ``wu_unit`` are the graph's weights built with
-    all four sigmas equal to 1, so a sigma s weighs 1/s^2 times them, except across time gaps
-    (``gap``, N-1), whose restart factors keep their own weights.  ``score``: rows whose gyro
-    sample may be predicted (moving above the speed gate).
+    from the physics preset).  ``unit_chunks(look_ahead)`` yields the graph built with all four
+    sigmas equal to 1 in consecutive chunks (:data:`UnitChunk`, each with ``look_ahead`` rows
+    after its scored rows unless it ends the drive), so only one chunk's factors are alive at
+    a time; a sigma s weighs 1/s^2 times the unit weights, except across time gaps (``gap``,
+    N-1), whose restart factors keep their own weights.  ``score``: rows whose gyro sample
+    may be predicted (moving above the speed gate).  Nothing is built when no sigma is searched.
     """
     base = PRESETS["paper"]
     sigmas = {k: (float(v) if v is not None else base[k]) for k, v in fixed.items()}
@@ -361,23 +429,31 @@ def choose_sigmas(
         return Tuning(sigmas, source, None, [])
     horizon = max(1, round(HORIZON_S / dt))
     candidates: list[dict[str, float]] = []
-    wu = wu_unit.copy()
-    wu[:, 0] = wu_unit[:, 0] / sigmas["yaw_rate"] ** 2
-    wq = wq_unit.copy()
-    move = ~gap
-    wq[move, 1] = wq_unit[move, 1] / sigmas["model_yaw_rate"] ** 2
     best = (math.inf, grid_a[0], grid_b[0])
     pairs = [(sa, sb) for sa in grid_a for sb in grid_b]
-    # every candidate's filter in one pass (sigma^2 divides the unit weights)
-    sums = gyro_prediction_errors(
-        F, g, wq, Hu, zu, wu, x0, P0, horizon, STRIDE, score, gap,
-        np.array([sa**2 for sa, _ in pairs]), np.array([sb**2 for _, sb in pairs]),
-    )  # fmt: skip
-    for (sa, sb), sse, count, se in zip(pairs, *(a.tolist() for a in sums), strict=True):
+    # every candidate's filter in one pass (sigma^2 divides the unit weights), chunk by chunk
+    ay_scale = np.array([sa**2 for sa, _ in pairs])
+    beta_scale = np.array([sb**2 for _, sb in pairs])
+    xs = np.tile(np.asarray(x0, dtype=float), (len(pairs), 1))
+    Ps = np.tile(np.asarray(P0, dtype=float), (len(pairs), 1, 1))
+    sse, se = np.zeros(len(pairs)), np.zeros(len(pairs))
+    count = np.zeros(len(pairs), dtype=np.int64)
+    for a, rows, F, g, wq_unit, Hu, zu, wu_unit in unit_chunks(horizon):
+        n_dyn = F.shape[0]
+        wu = wu_unit.copy()
+        wu[:, 0] = wu_unit[:, 0] / sigmas["yaw_rate"] ** 2
+        wq = wq_unit.copy()
+        move = ~gap[a : a + n_dyn]
+        wq[move, 1] = wq_unit[move, 1] / sigmas["model_yaw_rate"] ** 2
+        gyro_prediction_errors_into(
+            F, g, wq, Hu, zu, wu, rows, a, horizon, STRIDE, score[a : a + Hu.shape[0]],
+            gap[a : a + n_dyn], ay_scale, beta_scale, xs, Ps, sse, count, se,
+        )  # fmt: skip
+    for (sa, sb), s2, c, s1 in zip(pairs, sse.tolist(), count.tolist(), se.tolist(), strict=True):
         # the error's variance, not its mean square: a constant gyro bias (the model has
         # none, so the prediction decays it away over the horizon) shifts every candidate's
         # error alike and must not decide (raw phone gyros: several deg/s)
-        mse = max(sse / count - (se / count) ** 2, 0.0) if count else math.inf
+        mse = max(s2 / c - (s1 / c) ** 2, 0.0) if c else math.inf
         candidates.append({"lateral_acceleration": sa, "model_beta": sb,
                            "gyro_prediction_std_rad_s": math.sqrt(mse)})
         if mse < best[0]:
@@ -402,9 +478,16 @@ def _block_nis(
     sum over factors of (sum nu)^2 / sum S and its degrees of freedom (the factors with an
     update in the block); one pass over the rows."""
     n, n_fac = innov.shape
-    start = np.empty(n, dtype=np.int64)
-    nis = np.zeros(n)
-    dof = np.zeros(n)
+    n_blocks = 0  # first pass: the number of blocks (the outputs are allocated to it)
+    current = -1
+    for k in range(n):
+        b = int(np.floor((t[k] - t[0]) / block_s))
+        if b != current:
+            n_blocks += 1
+            current = b
+    start = np.empty(n_blocks, dtype=np.int64)
+    nis = np.zeros(n_blocks)
+    dof = np.zeros(n_blocks)
     sum_nu = np.zeros(n_fac)
     sum_s = np.zeros(n_fac)
     nb = 0
@@ -428,7 +511,7 @@ def _block_nis(
             if np.isfinite(innov[k, m]) and np.isfinite(S[k, m]):
                 sum_nu[m] += innov[k, m]
                 sum_s[m] += S[k, m]
-    return start[:nb].copy(), nis[:nb].copy(), dof[:nb].copy()
+    return start, nis, dof
 
 
 def block_consistency(
@@ -449,6 +532,7 @@ def block_consistency(
     n = innov.shape[0]
     start, nis, dof = _block_nis(t, innov, S, block_s)
     check = nis_consistency(t[start], nis, dof, window_s=WINDOW_S, causal=causal)
-    rows = np.repeat(np.arange(start.size), np.diff(np.r_[start, n]))
-    return Consistency(check.mean_nis[rows], check.inflation[rows], check.health[rows],
-                       check.flagged[rows], check.bound[rows])  # fmt: skip
+    rows = np.diff(np.r_[start, n])  # rows per block
+    return Consistency(np.repeat(check.mean_nis, rows), np.repeat(check.inflation, rows),
+                       np.repeat(check.health, rows), np.repeat(check.flagged, rows),
+                       np.repeat(check.bound, rows))  # fmt: skip

@@ -39,8 +39,11 @@ smoother, raised where the drive's accelerometer noise needs it; 0.15 s for the 
 filter, which has no later samples to average), and the noise it leaves, from the drive's
 own accelerometer (running estimate in the filter), enters the axle relations' variance; the
 wheel speed's sigma carries the longitudinal slip
-a_x / (g C_k) of braking and driving wheels; a stiffness the causal filter withholds in a
-transient enters the axle relation's variance (a consider parameter).  ``beta_std`` adds what
+a_x / (g C_k) of braking and driving wheels, in corners with the front axle's cornering drag
+and the combined-slip growth of the compliance (:mod:`sideslip.methods.fused_updates`); a
+stiffness the causal filter withholds in a
+transient is a consider parameter of the axle relation (Schmidt-Kalman: its variance and
+cross-covariances kept, its gain zero).  ``beta_std`` adds what
 the covariance's white updates cannot carry: the learned stiffness's remaining relative
 uncertainty times the rear slip, the tyres' relaxation lag, and, where nothing but the tyres
 pins the slip (no GNSS; and for the causal filter in every corner, where GNSS cannot tell

@@ -31,7 +31,10 @@ from sideslip.filters.kalman import (
     update_robust_scalar_ws_nb,
 )
 from sideslip.gnss import gauss_markov_nb
+from sideslip.methods.fused_updates import robust_consider_nb, wheel_slip_ratio
 from sideslip.models.fused_measurements import (
+    A_LF,
+    A_LR,
     A_NF,
     A_NR,
     front_axle_force,
@@ -41,7 +44,7 @@ from sideslip.models.fused_measurements import (
     standstill_yaw_rate,
     wheel_speed,
 )
-from sideslip.models.fused_process import ICX, IMU, IPE, IPN, ISF, ISR, IVX, IVY, U_AX, process_into
+from sideslip.models.fused_process import ICX, IMU, IPE, IPN, ISF, ISR, IVX, IVY, U_AX, process_into, yaw_rate
 from sideslip.vehicle import G
 
 # indices of the loop's configuration vector (filled by sideslip.methods.fused)
@@ -112,28 +115,29 @@ def _adapt(infl, nis, dt, cfg):
 
 
 @numba.njit(cache=True)
-def _gate_learning(h, P, i_k, i_mu, f, f_limit, steady, cfg):
-    """Zero the Jacobian entries an axle relation must not learn from; returns the variance
-    that the relation gains instead.
+def _gate_learning(h, i_k, i_mu, f, f_limit, steady, cfg):
+    """Zero the Jacobian entries an axle relation must not learn from; returns whether the
+    stiffness ``i_k`` is a consider parameter of this update.
 
     The stiffness is learned beyond C_STIFF_CURVE only (a noisy regressor near zero biases
     it: errors in variables) and, in the causal filter, only in quasi-steady cornering (at
     turn-in and turn-out the tyres' relaxation lag would be taken for a soft tyre); mu only
-    near the limit (the curve's bend).  Where the stiffness is withheld in a transient, its
-    current uncertainty enters the relation's variance (the diagonal part of a consider
-    parameter, Schmidt 1966): a relation with an unlearned stiffness is as uncertain as that
-    stiffness, not as certain as a known one (file 30 % soft, causal filter: cr_step_steer
-    beta RMSE 0.29 -> 0.17 deg, 2-sigma share 0.82 -> 1.00).  Below C_STIFF_CURVE the term is
-    negligible (the force, and so the stiffness's effect, is small) and is left out."""
-    r_con = 0.0
+    near the limit (the curve's bend).  Where the stiffness is withheld in a transient, it is
+    a consider parameter of the update (Schmidt-Kalman, :mod:`sideslip.methods.fused_updates`):
+    its uncertainty enters the innovation variance and its cross-covariances are kept, so a
+    relation with an unlearned stiffness is as uncertain as that stiffness, and the error the
+    stiffness causes is the same in every update of the transient instead of white (file 30 %
+    soft, causal filter: cr_step_steer beta RMSE 0.29 -> 0.17 deg with its variance alone
+    added to each update, 0.17 -> 0.08 with the cross-covariances).  Below C_STIFF_CURVE the
+    stiffness's effect is small and it is left out."""
+    consider = False
     if abs(f) < cfg[C_STIFF_CURVE]:
         h[i_k] = 0.0
     elif not steady:
-        r_con += h[i_k] * h[i_k] * P[i_k, i_k]
-        h[i_k] = 0.0
+        consider = True
     if abs(f) < cfg[C_MU_UTIL] * f_limit:
         h[i_mu] = 0.0
-    return r_con
+    return consider
 
 
 @numba.njit(cache=True, nogil=True)
@@ -191,6 +195,7 @@ def forward_nodes(
     h = np.zeros(nx)
     H2 = np.zeros((2, nx))
     work = np.zeros((nx + 5, nx))  # sideslip.filters.kalman.workspace
+    keep = np.ones(nx)  # gain factors of the axle updates: 0 for a consider stiffness
     infl_r = 1.0
     infl_f = 1.0
     gate = cfg[C_GATE]
@@ -223,10 +228,21 @@ def forward_nodes(
             # about 15-20; race lap: -3.5 % braking at 8 m/s^2, +6 % driving at 5 m/s^2)
             # (a_x the estimated longitudinal acceleration, the reading less the offset c_x);
             # below C_AXLE_MIN_SPEED a slip ratio is as ill-defined as a slip angle (a wheel
-            # pulling away; parking drive: a pull-away with the term had beta 1.1 -> 6.6 deg)
+            # pulling away; parking drive: a pull-away with the term had beta 1.1 -> 6.6 deg).
+            # In corners the driving force also overcomes the front axle's cornering drag and
+            # the slip grows with the rear's secant compliance (combined slip, brush model:
+            # sideslip.methods.fused_updates), where the rear force stands above the axle
+            # relation's noise floor C_FORCE_SIGMA (below it a slip-over-force secant is noise)
             slip = 0.0
             if abs(vw[k]) > cfg[C_AXLE_MIN_SPEED]:
                 slip = abs(u[U_AX] - x[ICX]) / (G * cfg[C_WHEEL_SLIP_STIFFNESS])
+                if abs(f_rear[k]) > cfg[C_FORCE_SIGMA] and x[IVX] > cfg[C_AXLE_MIN_SPEED]:
+                    r_k = yaw_rate(x, u, cfg[C_K_PHI], dr)
+                    slip = wheel_slip_ratio(
+                        u[U_AX] - x[ICX], f_rear[k], (x[IVY] - axle[A_LR] * r_k) / x[IVX],
+                        (x[IVY] + axle[A_LF] * r_k) / x[IVX], axle[A_LR] / axle[A_LF],
+                        cfg[C_WHEEL_SLIP_STIFFNESS],
+                    )  # fmt: skip
             sig_w = cfg[C_WHEEL_SIGMA] + abs(vw[k]) * (cfg[C_WHEEL_REL] + slip)
             d2, ok = _robust(x, P, vw[k] - hv, h, sig_w * sig_w, gate, work)
             nis[k, K_WHEEL] = d2
@@ -239,20 +255,30 @@ def forward_nodes(
             if math.isfinite(f_rear[k]):
                 hv = rear_axle_force(x, u, cfg[C_K_PHI], axle, h, dr)
                 lim = max(x[IMU], 0.05) * axle[A_NR]
-                r_con = _gate_learning(h, P, ISR, IMU, f_rear[k], lim, steady[k], cfg)
+                consider = _gate_learning(h, ISR, IMU, f_rear[k], lim, steady[k], cfg)
                 sig = cfg[C_FORCE_SIGMA] + cfg[C_FORCE_REL] * abs(f_rear[k])
-                r_ax = ((sig * sig + force_var[k]) * rate_scale + r_con) * infl_r
-                d2, ok = _robust(x, P, f_rear[k] - hv, h, r_ax, gate, work)
+                r_ax = (sig * sig + force_var[k]) * rate_scale * infl_r
+                if consider:
+                    keep[ISR] = 0.0
+                    d2, ok = robust_consider_nb(x, P, f_rear[k] - hv, h, r_ax, gate, keep, work)
+                    keep[ISR] = 1.0
+                else:
+                    d2, ok = _robust(x, P, f_rear[k] - hv, h, r_ax, gate, work)
                 nis[k, K_REAR] = d2
                 counts[2 if ok else 3] += 1
                 infl_r = _adapt(infl_r, d2, dtk, cfg)
             if math.isfinite(f_front[k]) and math.isfinite(delta[k]):
                 hv = front_axle_force(x, u, delta[k], cfg[C_K_PHI], axle, h, dr)
                 lim = max(x[IMU], 0.05) * axle[A_NF]
-                r_con = _gate_learning(h, P, ISF, IMU, f_front[k], lim, steady[k], cfg)
+                consider = _gate_learning(h, ISF, IMU, f_front[k], lim, steady[k], cfg)
                 sig = cfg[C_FORCE_SIGMA] + cfg[C_FORCE_REL] * abs(f_front[k])
-                r_ax = ((sig * sig + force_var[k]) * rate_scale + r_con) * infl_f
-                d2, ok = _robust(x, P, f_front[k] - hv, h, r_ax, gate, work)
+                r_ax = (sig * sig + force_var[k]) * rate_scale * infl_f
+                if consider:
+                    keep[ISF] = 0.0
+                    d2, ok = robust_consider_nb(x, P, f_front[k] - hv, h, r_ax, gate, keep, work)
+                    keep[ISF] = 1.0
+                else:
+                    d2, ok = _robust(x, P, f_front[k] - hv, h, r_ax, gate, work)
                 nis[k, K_FRONT] = d2
                 counts[2 if ok else 3] += 1
                 infl_f = _adapt(infl_f, d2, dtk, cfg)

@@ -43,7 +43,8 @@ class FusedSettings:
     wheel_rel_sigma: float = 0.003  # fraction of the speed: wheel slip, rolling-radius changes
     # normalised longitudinal slip stiffness C_k / F_z of the wheels that give the speed
     # (Pacejka 2012, sec. 1.3: 15-20 for passenger-car tyres; the lower value, since the
-    # speed wheels carry only part of the load): the wheel speed's slip sigma is a_x / (g C_k)
+    # speed wheels carry only part of the load): the wheel speed's slip sigma is a_x / (g C_k),
+    # in corners with the cornering drag and the combined-slip compliance (fused_updates)
     wheel_slip_stiffness: float = 15.0
     gnss_vel_sigma: float = 0.1  # m/s, when the drive has no gnss_vel_std
     gnss_pos_sigma: float = 0.5  # m, white part, when the drive has no gnss_pos_std

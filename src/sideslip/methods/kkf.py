@@ -55,7 +55,7 @@ from numpy.typing import NDArray
 from sideslip import gnss, typical
 from sideslip.drive import Drive
 from sideslip.estimate import Estimate
-from sideslip.filters.kalman import predict_nb, update_scalar_nb
+from sideslip.filters.kalman import predict_ws_nb, update_scalar_ws_nb
 from sideslip.filters.nis_windows import binned_nis_consistency
 from sideslip.frames import wrap_angle
 from sideslip.methods.mkf import (
@@ -285,6 +285,7 @@ def _kkf_loop(
     Gu = np.zeros(3)
     h_psi = np.array([1.0, 0.0, 0.0])
     h_b = np.array([0.0, 1.0, 0.0])
+    work = np.zeros((8, 3))  # filters.kalman.workspace(3): no per-row allocation
     w = 0.0
     st = False
     on_time = 0.0
@@ -307,11 +308,11 @@ def _kkf_loop(
                 Q[0, 0] = 0.0
             else:
                 Gu[0] = dt * w
-            predict_nb(x, P, F, Q, Gu)
+            predict_ws_nb(x, P, F, Q, Gu, work)
         w = w_new
         if zero_rate[k] and np.isfinite(wz[k]):
             # gyro at standstill reads its bias
-            update_scalar_nb(x, P, wz[k] - x[1], h_b, gyro_var[k])
+            update_scalar_ws_nb(x, P, wz[k] - x[1], h_b, gyro_var[k], work)
         dt_k = t[k] - t[k - 1] if k > 0 else 0.0
         yaw_dev = wz_mean[k] - x[1] - x[2] * wz_mean[k]
         yaw_dev_fast = wz_fast[k] - x[1] - x[2] * wz_fast[k]
@@ -328,14 +329,88 @@ def _kkf_loop(
         straight[k] = st
         if st and np.isfinite(course[k]):
             nu = _wrap(course[k] - x[0])
-            S[k] = update_scalar_nb(
-                x, P, nu, h_psi, course_var[k] + sigma_beta_straight * sigma_beta_straight
+            S[k] = update_scalar_ws_nb(
+                x, P, nu, h_psi, course_var[k] + sigma_beta_straight * sigma_beta_straight, work
             )
             innov[k] = nu
         for i in range(3):
             xs[k, i] = x[i]
             pd[k, i] = P[i, i]
     return xs, pd, straight, innov, S
+
+
+@numba.njit(cache=True)
+def _beta_at_course(
+    t: NDArray, course: NDArray, psi: NDArray, var_psi: NDArray, sigma: NDArray,
+    innov: NDArray, wz: NDArray, sin_bank: NDArray, speed: NDArray, scale_sigma: float,
+    k_slip_g: float, road_sigma: float, max_age: float, v_gate: float, prior: float,
+) -> tuple[NDArray, NDArray, NDArray, NDArray]:  # fmt: skip  # pragma: no cover - compiled
+    """Sideslip beta = nu - psi at each fresh course (seed 001 eq 6) held to the next, its
+    1-sigma with the model-error terms of the module docstring, the filter's own 1-sigma
+    (eq 6: sqrt(P_psi + sigma_nu^2)), and the fresh-course flags; one pass, no temporaries.
+
+    Terms of the variance at a fresh course: P_psi + sigma_nu^2 + (scale_sigma x heading
+    turned since the last course update on a straight)^2 + (k_slip g sin(bank at that
+    update))^2 + (sum |w_z| (1/cos(bank) - 1) dt since it)^2.  ``sin_bank``: per row, or one
+    value for all rows.  Outside ``max_age`` of the last course or below ``v_gate``: beta 0,
+    both 1-sigmas ``prior``.
+    """
+    n = t.size
+    beta = np.zeros(n)
+    beta_std = np.full(n, prior)
+    own_std = np.full(n, prior)
+    fresh = np.zeros(n, dtype=np.bool_)
+    any_update = False
+    for k in range(n):
+        if np.isfinite(innov[k]):
+            any_update = True
+            break
+    one_bank = sin_bank.size == 1
+    turned = 0.0  # heading turned since row 0 (integrated gyro)
+    tilt_turned = 0.0  # sum |w_z| (1/cos(bank) - 1) dt since row 0
+    turned_last = 0.0  # both at the last course update (row 0 before the first)
+    tilt_last = 0.0
+    last = 0
+    beta_h = 0.0
+    std_h = prior
+    own_h = prior
+    t_beta = -np.inf
+    for k in range(n):
+        if k > 0:
+            w = wz[k - 1] if np.isfinite(wz[k - 1]) else 0.0
+            dt = t[k] - t[k - 1]
+            turned += w * dt
+            sb = sin_bank[0] if one_bank else sin_bank[k - 1]
+            sb = 0.9 if sb > 0.9 else sb
+            tilt = 1.0 / np.sqrt(1.0 - sb * sb) - 1.0
+            tilt_turned += abs(w) * tilt * dt
+        if np.isfinite(innov[k]):
+            turned_last = turned
+            tilt_last = tilt_turned
+            last = k
+        if np.isfinite(course[k]):
+            fresh[k] = True
+            sg = sigma[k] if np.isfinite(sigma[k]) else 0.0
+            own = var_psi[k] + sg * sg
+            d_scale = scale_sigma * (turned - turned_last)
+            bank = (sin_bank[0] if one_bank else sin_bank[last]) if any_update else road_sigma
+            d_bank = k_slip_g * bank
+            d_tilt = tilt_turned - tilt_last
+            var = own + d_scale * d_scale
+            var = var + d_bank * d_bank + d_tilt * d_tilt
+            b = _wrap(course[k] - psi[k])
+            if np.isfinite(b):
+                beta_h = b
+                t_beta = t[k]
+            if np.isfinite(var):
+                std_h = np.sqrt(var)
+            if np.isfinite(own):
+                own_h = np.sqrt(own)
+        if t[k] - t_beta <= max_age and abs(speed[k]) > v_gate:
+            beta[k] = beta_h
+            beta_std[k] = std_h
+            own_std[k] = own_h
+    return beta, beta_std, own_std, fresh
 
 
 @dataclass(frozen=True)
@@ -372,57 +447,47 @@ def run_kkf(
     speed = vehicle_speed(drive)
     cm = gnss.course_at_cg(drive, vehicle, speed, st.v_gate_m_s)
     wz = drive["wz"] / (1.0 + scale)
-    wz_mean = causal_mean(t, wz, STRAIGHT_WINDOW_S)
-    wz_fast = causal_mean(t, wz, STRAIGHT_FAST_S)
     rows = np.flatnonzero(np.isfinite(cm.course))
     gnss_dt = float(np.median(np.diff(t[rows]))) if rows.size > 1 else 0.1
-    crate = _course_rate(t, cm.course, max(STRAIGHT_WINDOW_S, 2.0 * gnss_dt))
-    zero_rate = np.abs(speed) < STANDSTILL_SPEED
+    del rows
     x0 = np.array([initial_heading(t, wz, cm.course), 0.0, 0.0])
     P0 = np.diag([SIGMA_PSI0**2, SIGMA_BIAS0**2, SIGMA_SCALE0**2 if estimate_scale else 0.0])
     # the yaw-rate lever-arm term of the course (rx r / V) is removed with the raw gyro
     course = np.where(np.isfinite(cm.course), cm.course - cm.hr * np.nan_to_num(wz), np.nan)
     g_sigma, g_source = kkf_gyro_sigma(drive, st)
+    # the per-row inputs of every pass, built once (the bias-walk passes share them) and
+    # released before the beta series are formed
+    inputs = [
+        wz, causal_mean(t, wz, STRAIGHT_WINDOW_S), causal_mean(t, wz, STRAIGHT_FAST_S),
+        sample_variance(t, g_sigma), course, cm.sigma**2,
+        _course_rate(t, cm.course, max(STRAIGHT_WINDOW_S, 2.0 * gnss_dt)), speed,
+        np.abs(speed) < STANDSTILL_SPEED,
+    ]  # fmt: skip
 
     def loop(q_bias: float) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray]:
+        w, w_mean, w_fast, g_var, nu, nu_var, nu_rate, v, still = inputs
         return _kkf_loop(
-            t, wz, wz_mean, wz_fast, sample_variance(t, g_sigma), course, cm.sigma**2, crate,
-            speed, zero_rate, x0, P0, q_bias, st.straight_on_rad_s, st.straight_off_rad_s,
+            t, w, w_mean, w_fast, g_var, nu, nu_var, nu_rate, v, still, x0, P0, q_bias,
+            st.straight_on_rad_s, st.straight_off_rad_s,
             st.straight_hold_s, st.v_gate_m_s, SIGMA_BETA_STRAIGHT, BIAS_KNOWN_VAR,
         )  # fmt: skip
 
     q_bias, bias_choice = _bias_walk(st, loop)
     xs, pd, straight, innov, S = loop(q_bias)
-    fresh = np.isfinite(course)
-    beta_f = np.where(fresh, wrap_angle(np.nan_to_num(course) - xs[:, 0]), np.nan)
-    var_f = pd[:, 0] + np.nan_to_num(cm.sigma) ** 2
-    # heading turned since the last course update on a straight (where psi was measured)
-    upd = np.isfinite(innov)
-    last = np.where(upd, np.arange(t.size), 0)
-    np.maximum.accumulate(last, out=last)  # row of the last update (0 before the first)
-    dt_rows = np.diff(t)
-    turned = np.concatenate(([0.0], np.cumsum(np.nan_to_num(wz[:-1]) * dt_rows)))
-    var_f = var_f + (st.gyro_scale_rel_sigma * (turned - turned[last])) ** 2
+    inputs.clear()
     # road bank: the car crabs by ~ k_slip g sin(bank) on a banked straight (assumed beta = 0
     # there, so psi takes it), and its body-z gyro under-reads the heading rate by
     # 1/cos(bank) - 1 in turns on the bank; the bank from the accelerometer when present
-    cue = gravity_lateral_sin(drive, speed, wz - xs[:, 1])
-    sin_bank = np.full(t.size, st.road_bank_sigma) if cue is None else cue
+    yaw_rate = wz - xs[:, 1]
+    cue = gravity_lateral_sin(drive, speed, yaw_rate)
+    del yaw_rate
+    sin_bank = np.array([st.road_bank_sigma]) if cue is None else cue
     k_slip, _ = typical.slip_gain_k(vehicle)
-    bank_at_update = np.where(upd.any(), sin_bank[last], st.road_bank_sigma)
-    tilt = 1.0 / np.sqrt(1.0 - np.minimum(sin_bank, 0.9) ** 2) - 1.0
-    tilt_turn = np.concatenate(([0.0], np.cumsum(np.abs(np.nan_to_num(wz[:-1])) * tilt[:-1]
-                                                 * dt_rows)))  # fmt: skip
-    var_f = var_f + (k_slip * GRAVITY_M_S2 * bank_at_update) ** 2 + (tilt_turn - tilt_turn[last]) ** 2
-    std_f = np.where(fresh, np.sqrt(var_f), np.nan)
-    own_f = np.where(fresh, np.sqrt(pd[:, 0] + np.nan_to_num(cm.sigma) ** 2), np.nan)
-    beta_h, age = hold(beta_f, t, fill=0.0)
-    std_h, _ = hold(std_f, t, fill=KKF_BETA_PRIOR)
-    own_h, _ = hold(own_f, t, fill=KKF_BETA_PRIOR)
-    ok = (age <= max(KKF_MAX_COURSE_AGE_S, 1.5 * gnss_dt)) & (np.abs(speed) > st.v_gate_m_s)
-    beta = np.where(ok, beta_h, 0.0)
-    beta_std = np.where(ok, std_h, KKF_BETA_PRIOR)
-    beta_std_filter = np.where(ok, own_h, KKF_BETA_PRIOR)
+    beta, beta_std, beta_std_filter, fresh = _beta_at_course(
+        t, course, xs[:, 0], pd[:, 0], cm.sigma, innov, wz, sin_bank, speed,
+        st.gyro_scale_rel_sigma, k_slip * GRAVITY_M_S2, st.road_bank_sigma,
+        max(KKF_MAX_COURSE_AGE_S, 1.5 * gnss_dt), st.v_gate_m_s, KKF_BETA_PRIOR,
+    )  # fmt: skip
     return KkfResult(beta, beta_std, xs, pd, straight, fresh, innov, S, beta_std_filter,
                      g_sigma, g_source, q_bias, bias_choice)  # fmt: skip
 

@@ -4,7 +4,7 @@ State x = [beta (rad), r (rad/s), psi (rad), b_gyro (rad/s)]; input u = [delta, 
 the drive has no bank measurement)]; measurements: gyro w_z = r + b_gyro every IMU row, GNSS
 course nu = psi + beta + (rx/V) r at GNSS rows (seed 001 eq 5).  Model and discretisation:
 :mod:`sideslip.models.mkf_model`; Joseph-form scalar updates (eq 2,
-:func:`sideslip.filters.kalman.update_scalar_nb`) in the order standstill pseudo-measurement,
+:func:`sideslip.filters.kalman.update_scalar_ws_nb`) in the order standstill pseudo-measurement,
 gyro, course; the GNSS course from :func:`sideslip.gnss.course_at_cg`.
 
 Noise (:class:`MkfSettings`).  ``preset="auto"`` (default) takes the gyro's white noise from the
@@ -59,21 +59,20 @@ from sideslip.drive import Drive
 from sideslip.estimate import Estimate
 from sideslip.filters.kalman import (
     normalised_innovations,
-    predict_nb,
-    update_scalar_nb,
+    predict_ws_nb,
+    update_scalar_ws_nb,
     whiteness,
 )
 from sideslip.filters.nis_windows import binned_nis_consistency
 from sideslip.frames import wrap_angle
+from sideslip.methods.mkf_terms import _bank_source, _nis_into, bank_beta_gain, bank_sigma
 from sideslip.methods.mkf_tuning import choose_noise
 from sideslip.methods.registry import SPEED, register
 from sideslip.models.mkf_model import H_GYRO, V_GATE, MkfNoise, model_table
-from sideslip.models.single_track import continuous_arrays
 from sideslip.settings import settings_dict
 from sideslip.signals import (
     STANDSTILL_SPEED,
     causal_mean,
-    gravity_lateral_sin,
     hold,
     sample_variance,
     vehicle_speed,
@@ -221,6 +220,8 @@ class MkfProblem:
     P0: FloatArray
     low: NDArray[np.bool_]
     noise_choice: dict[str, Any] = field(default_factory=dict)
+    gyro_sigma_100hz: float = SIGMA_GYRO_100HZ  # rad/s behind gyro_var, and its source
+    gyro_sigma_source: str = "typical"
 
 
 def initial_heading(t: FloatArray, wz: FloatArray, course: FloatArray) -> float:
@@ -239,30 +240,34 @@ def mkf_problem(
     vehicle: Vehicle,
     bank: FloatArray | None = None,
     settings: MkfSettings | None = None,
+    speed: FloatArray | None = None,
 ) -> MkfProblem:
-    """Assemble the MKF inputs from a drive (bank: known road bank per row, default zero)."""
+    """Assemble the MKF inputs from a drive (bank: known road bank per row, default zero;
+    speed: :func:`sideslip.signals.vehicle_speed` of the drive when the caller has it)."""
     st = settings if settings is not None else MkfSettings()
     t = drive.t
-    speed = vehicle_speed(drive)
+    if speed is None:
+        speed = vehicle_speed(drive)
     steer, _ = hold(drive["steer"], t) if "steer" in drive else (np.zeros_like(t), None)
     u = np.zeros((t.size, 2))  # C-contiguous rows for the numba loop
     u[:, 0] = steer
     if bank is not None:
         u[:, 1] = np.nan_to_num(np.asarray(bank, dtype=float))
-    tab = model_table(vehicle, t, speed, st.noise(), st.v_gate_m_s)
+    tune_sy, tune_b = st.tuned_groups()
+    tab = model_table(vehicle, t, speed, st.noise(), st.v_gate_m_s, split=tune_sy or tune_b)
     cm = gnss.course_at_cg(drive, vehicle, speed, st.v_gate_m_s)
     wz = drive["wz"]
     x0 = np.array([0.0, 0.0, initial_heading(t, wz, cm.course), 0.0])
     P0 = np.diag([SIGMA_BETA0, SIGMA_R0, SIGMA_PSI0, SIGMA_BIAS0]) ** 2
-    g_sigma, _ = gyro_sigma(drive, st)
+    g_sigma, g_source = gyro_sigma(drive, st)
     prob = MkfProblem(
         tab.Ad, tab.Bd, tab.Qd, tab.idx, u, wz, sample_variance(t, g_sigma), cm.course,
         cm.sigma**2, cm.hr, np.abs(speed) < STANDSTILL_SPEED, x0, P0, tab.low,
+        gyro_sigma_100hz=g_sigma, gyro_sigma_source=g_source,
     )  # fmt: skip
-    tune_sy, tune_b = st.tuned_groups()
     if not (tune_sy or tune_b):
         return prob
-    choice = choose_noise(prob, tab.scaled_qd, run_mkf_problem, tune_sy, tune_b)
+    choice = choose_noise(prob, tab.scaled_qd, mkf_scores, tune_sy, tune_b)
     return dataclasses.replace(
         prob, Qd=tab.scaled_qd(choice.steer_yaw_factor, choice.beta_factor),
         noise_choice=choice.as_params(),
@@ -279,39 +284,65 @@ def _mkf_loop(
     Ad: NDArray, Bd: NDArray, Qd: NDArray, idx: NDArray, u: NDArray,
     gyro: NDArray, gyro_var: NDArray, course: NDArray, course_var: NDArray, hr: NDArray,
     zero_rate: NDArray, x0: NDArray, P0: NDArray, zero_rate_var: float, h_g: NDArray,
-) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray, NDArray]:  # fmt: skip
+    store: bool,
+) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray, NDArray, NDArray]:  # fmt: skip
+    """One MKF pass.  ``store``: keep the per-row states, variances, innovations and S (else
+    arrays of length 0, for the tuning passes that need the scores only).  Always returns
+    ``scores`` = [-2 ln L gyro, gyro updates, -2 ln L course, course updates] (sum of
+    ln S + nu^2 / S over the updates with finite nu and S > 0, as
+    :func:`sideslip.methods.mkf_tuning.neg2_log_likelihood`).  One workspace for every
+    predict/update (no per-row allocation)."""
     n = u.shape[0]
+    m = n if store else 0
     x = x0.copy()
     P = P0.copy()
-    xs = np.empty((n, 4))
-    pd = np.empty((n, 4))
-    ig = np.full(n, np.nan)
-    sg = np.full(n, np.nan)
-    ic = np.full(n, np.nan)
-    sc = np.full(n, np.nan)
+    xs = np.empty((m, 4))
+    pd = np.empty((m, 4))
+    ig = np.full(m, np.nan)
+    sg = np.full(m, np.nan)
+    ic = np.full(m, np.nan)
+    sc = np.full(m, np.nan)
+    scores = np.zeros(4)
+    work = np.zeros((9, 4))  # filters.kalman.workspace(4)
+    gu = np.zeros(4)
     h_r = np.array([0.0, 1.0, 0.0, 0.0])
     h_c = np.zeros(4)
     for k in range(n):
         if k > 0:
             j = idx[k]
-            predict_nb(x, P, Ad[j], Qd[j], Bd[j] @ u[k - 1])
+            u0 = u[k - 1, 0]
+            u1 = u[k - 1, 1]
+            for i in range(4):
+                gu[i] = Bd[j, i, 0] * u0 + Bd[j, i, 1] * u1
+            predict_ws_nb(x, P, Ad[j], Qd[j], gu, work)
         if zero_rate[k]:
-            update_scalar_nb(x, P, -x[1], h_r, zero_rate_var)
+            update_scalar_ws_nb(x, P, -x[1], h_r, zero_rate_var, work)
         if np.isfinite(gyro[k]):
             nu = gyro[k] - x[1] - x[3]
-            sg[k] = update_scalar_nb(x, P, nu, h_g, gyro_var[k])
-            ig[k] = nu
+            s = update_scalar_ws_nb(x, P, nu, h_g, gyro_var[k], work)
+            if np.isfinite(nu) and np.isfinite(s) and s > 0.0:
+                scores[0] += math.log(s) + nu * nu / s
+                scores[1] += 1.0
+            if store:
+                sg[k] = s
+                ig[k] = nu
         if np.isfinite(course[k]):
             h_c[0] = 1.0
             h_c[1] = hr[k]
             h_c[2] = 1.0
             nu = _wrap(course[k] - (x[0] + hr[k] * x[1] + x[2]))
-            sc[k] = update_scalar_nb(x, P, nu, h_c, course_var[k])
-            ic[k] = nu
-        for i in range(4):
-            xs[k, i] = x[i]
-            pd[k, i] = P[i, i]
-    return xs, pd, ig, sg, ic, sc
+            s = update_scalar_ws_nb(x, P, nu, h_c, course_var[k], work)
+            if np.isfinite(nu) and np.isfinite(s) and s > 0.0:
+                scores[2] += math.log(s) + nu * nu / s
+                scores[3] += 1.0
+            if store:
+                sc[k] = s
+                ic[k] = nu
+        if store:
+            for i in range(4):
+                xs[k, i] = x[i]
+                pd[k, i] = P[i, i]
+    return xs, pd, ig, sg, ic, sc, scores
 
 
 @dataclass(frozen=True)
@@ -326,13 +357,25 @@ class MkfResult:
     course_s: FloatArray
 
 
-def run_mkf_problem(prob: MkfProblem) -> MkfResult:
-    """Run the MKF loop (numba) on an assembled problem."""
-    out = _mkf_loop(
+def _run_loop(prob: MkfProblem, store: bool) -> tuple[NDArray, ...]:
+    return _mkf_loop(
         prob.Ad, prob.Bd, prob.Qd, prob.idx, prob.u, prob.gyro, prob.gyro_var, prob.course,
         prob.course_var, prob.hr, prob.zero_rate, prob.x0, prob.P0, SIGMA_ZERO_RATE**2, H_GYRO,
+        store,
     )  # fmt: skip
-    return MkfResult(*out)
+
+
+def run_mkf_problem(prob: MkfProblem) -> MkfResult:
+    """Run the MKF loop (numba) on an assembled problem."""
+    return MkfResult(*_run_loop(prob, True)[:6])
+
+
+def mkf_scores(prob: MkfProblem) -> tuple[tuple[float, int], tuple[float, int]]:
+    """-2 ln L and update count of the gyro and of the GNSS-course innovations of one MKF pass
+    (the tuning criterion of :mod:`sideslip.methods.mkf_tuning`), without per-row output: the
+    pass allocates O(1) memory."""
+    sc = _run_loop(prob, False)[6]
+    return (float(sc[0]), int(sc[1])), (float(sc[2]), int(sc[3]))
 
 
 def channel_diagnostics(innov: FloatArray, s: FloatArray, lags: int = WHITENESS_LAGS) -> dict[str, Any]:
@@ -363,37 +406,6 @@ def residual_diagnostics(res: MkfResult, lags: int = WHITENESS_LAGS) -> dict[str
     }
 
 
-def _nis(innov: FloatArray, s: FloatArray) -> FloatArray:
-    with np.errstate(invalid="ignore", divide="ignore"):
-        return np.where(np.isfinite(innov) & (s > 0), innov * innov / np.where(s > 0, s, 1.0), np.nan)
-
-
-def bank_beta_gain(vehicle: Vehicle, speed: FloatArray) -> FloatArray:
-    """Steady-state sideslip per unit road bank of the single-track model (rad/rad) at each
-    row's speed: the bank column of -A^-1 B (seed 001 eq 1); 0 below the model's gate."""
-    v = np.clip(np.abs(speed), V_GATE, None)
-    grid = np.unique(np.round(v, 1))
-    a2, b2, _, _ = continuous_arrays(vehicle, grid)
-    gain = -np.linalg.solve(a2, b2)[:, 0, 1]
-    return np.asarray(np.interp(v, grid, gain), dtype=float)
-
-
-def bank_sigma(
-    drive: Drive, speed: FloatArray, yaw_rate: FloatArray, settings: MkfSettings
-) -> tuple[FloatArray, str]:
-    """1-sigma (as sin) of the road bank the flat-road model ignores, per row, and its source.
-
-    With an accelerometer: hypot(``bank_floor_sigma``, |g sin(roll + bank)| cue) from
-    :func:`sideslip.signals.gravity_lateral_sin` (conservative in turns, where it also holds
-    the suspension roll).  Without: ``road_bank_sigma`` (typical crown and bank of public
-    roads) on every row.
-    """
-    cue = gravity_lateral_sin(drive, speed, yaw_rate)
-    if cue is None:
-        return np.full(drive.t.size, settings.road_bank_sigma), "typical road bank (no ay)"
-    return np.hypot(settings.bank_floor_sigma, cue), "accelerometer cue (ay - V r) / g"
-
-
 def _process_noise_params(settings: MkfSettings, prob: MkfProblem) -> dict[str, Any]:
     """The process-noise densities the filter ran with and how they were chosen."""
     base = settings.noise()
@@ -419,48 +431,75 @@ def mkf_estimate(
     bank: FloatArray | None,
     settings: MkfSettings,
 ) -> Estimate:
-    """Run the MKF and package its estimate (series, params, innovations)."""
-    prob = mkf_problem(drive, vehicle, bank, settings)
-    res = run_mkf_problem(prob)
+    """Run the MKF and package its estimate (series, params, innovations).
+
+    Memory (issue 17): the problem's per-row inputs are freed once the pass has run, the
+    residual statistics are taken before the output series exist, and the standard deviations,
+    NIS and wrapped yaw are formed in the pass's own arrays."""
     t = drive.t
-    sd = np.sqrt(np.maximum(res.var, 0.0))
-    nis_g = _nis(res.gyro_innov, res.gyro_s)
-    nis_c = _nis(res.course_innov, res.course_s)
-    beta_std = sd[:, 0]
-    inflation = np.ones(t.size)
+    speed = vehicle_speed(drive)
+    prob = mkf_problem(drive, vehicle, bank, settings, speed=speed)
+    res = run_mkf_problem(prob)
+    steer = prob.u[:, 0].copy() if settings.stiffness_rel_sigma > 0 else None
+    problem_params = {
+        "low_speed_fraction": float(np.mean(prob.low)),
+        "gnss_course_updates": int(np.isfinite(prob.course).sum()),
+    }
+    noise_params = _process_noise_params(settings, prob)
+    g_sigma, g_source = prob.gyro_sigma_100hz, prob.gyro_sigma_source
+    del prob
+    residuals = residual_diagnostics(res)
+    nis_g, nis_c = res.gyro_s, res.course_s  # S becomes the NIS in place
+    _nis_into(res.gyro_innov, nis_g)
+    _nis_into(res.course_innov, nis_c)
     health = np.zeros(t.size)
     health_params: dict[str, Any] = {"criterion": "off"}
+    sd = res.var
+    np.sqrt(np.maximum(sd, 0.0, out=sd), out=sd)
+    beta_std = np.square(sd[:, 0])
     if settings.consistency_window_s > 0:
         both = np.nan_to_num(nis_g) + np.nan_to_num(nis_c)
         dof = np.isfinite(nis_g).astype(float) + np.isfinite(nis_c).astype(float)
         cons = binned_nis_consistency(t, both, dof, settings.consistency_window_s)
-        inflation, health = cons.inflation, cons.health
-        health_params = cons.summary(t)
-    speed = vehicle_speed(drive)
-    model_sigma = np.zeros(t.size)
-    if settings.stiffness_rel_sigma > 0:
-        steer = prob.u[:, 0]
-        kin = vehicle.lr / vehicle.wheelbase * steer
+        del both, dof
+        health, health_params = cons.health, cons.summary(t)
+        beta_std *= cons.inflation
+        root = np.sqrt(cons.inflation)
+        del cons
+        sd[:, 1] *= root
+        sd[:, 2] *= root
+        del root
+    if steer is not None:
         # RMS over the last STIFFNESS_WINDOW_S: a wrong stiffness also shifts the phase of
         # beta in transients, so its error does not vanish where beta crosses lr/L delta
-        slip = res.x[:, 0] - kin
+        slip = res.x[:, 0] - vehicle.lr / vehicle.wheelbase * steer
+        del steer
         slip_rms = np.sqrt(np.maximum(causal_mean(t, slip**2, STIFFNESS_WINDOW_S), 0.0))
-        model_sigma = settings.stiffness_rel_sigma * np.maximum(np.abs(slip), slip_rms)
-    bank_sd, bank_source = bank_sigma(drive, speed, res.x[:, 1], settings)
-    bank_beta_sd = np.abs(bank_beta_gain(vehicle, speed)) * bank_sd
-    if bank is not None:
-        bank_beta_sd = np.zeros(t.size)  # the bank is a known input
+        np.maximum(np.abs(slip, out=slip), slip_rms, out=slip)
+        del slip_rms
+        beta_std += np.square(settings.stiffness_rel_sigma * slip, out=slip)
+        del slip
+    if bank is None:
+        bank_sd, bank_source = bank_sigma(
+            drive, speed, res.x[:, 1], settings.bank_floor_sigma, settings.road_bank_sigma
+        )
+        bank_sd *= bank_beta_gain(vehicle, speed)
+        beta_std += np.square(bank_sd, out=bank_sd)
+        del bank_sd
+    else:  # the bank is a known input
+        bank_source = _bank_source(drive)
     thrust = settings.thrust_angle_sigma_rad
-    beta_std = np.sqrt(beta_std**2 * inflation + model_sigma**2 + bank_beta_sd**2 + thrust**2)
-    g_sigma, g_source = gyro_sigma(drive, settings)
+    beta_std += thrust**2
+    np.sqrt(beta_std, out=beta_std)
+    res.x[:, 2] = wrap_angle(res.x[:, 2])
     series = {
         "beta": res.x[:, 0],
         "r": res.x[:, 1],
-        "yaw": wrap_angle(res.x[:, 2]),
+        "yaw": res.x[:, 2],
         "gyro_bias": res.x[:, 3],
         "beta_std": beta_std,
-        "r_std": sd[:, 1] * np.sqrt(inflation),
-        "yaw_std": sd[:, 2] * np.sqrt(inflation),
+        "r_std": sd[:, 1],
+        "yaw_std": sd[:, 2],
         "gyro_bias_std": sd[:, 3],
         "health": health,
     }
@@ -471,8 +510,7 @@ def mkf_estimate(
             "cr": vehicle.cr,
             "bank_input": "given" if bank is not None else "zero",
             "v_gate_mps": settings.v_gate_m_s,
-            "low_speed_fraction": float(np.mean(prob.low)),
-            "gnss_course_updates": int(np.isfinite(prob.course).sum()),
+            **problem_params,
             "gyro_bias_rad_s": float(res.x[-1, 3]),
             "gyro_bias_rad_s_sigma": float(sd[-1, 3]),
             "noise": {
@@ -484,9 +522,9 @@ def mkf_estimate(
                     if g_source.startswith("drive")
                     else g_source
                 ),
-                **_process_noise_params(settings, prob),
+                **noise_params,
             },
-            "residuals": residual_diagnostics(res),
+            "residuals": residuals,
             "health": health_params,
             "beta_std_terms": {
                 "filter": "P_beta x windowed-NIS inflation",

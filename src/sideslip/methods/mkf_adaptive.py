@@ -114,6 +114,7 @@ def identify_from_kkf(
     first = run_kkf(drive, vehicle, estimate_scale=True, settings=kkf_settings)
     scale_std = float(np.sqrt(max(first.var[-1, 2], 0.0)))
     scale = float(np.clip(first.x[-1, 2], -0.1, 0.1)) if scale_std < ID_SCALE_STD_MAX else 0.0
+    del first  # only its scale factor is used: not held through the second pass (issue 17)
     res = run_kkf(drive, vehicle, scale=scale, settings=kkf_settings)
     t = drive.t
     wz, _ = hold(drive["wz"], t)

@@ -21,8 +21,9 @@ measures what the density drives:
 
 -2 ln L = sum over updates of ln S + nu^2 / S (constants dropped).  Cost: one filter pass per
 grid point (|STEER_YAW_GRID| x |BETA_GRID| = 12 passes of the numba loop, the discretised model
-table shared, Q_d being linear in Q_c), linear in the drive's length; only each pass's scores
-are kept, so the memory is that of one pass.  The grids stop at
+table shared, Q_d being linear in Q_c), linear in the drive's length; a tuning pass sums the
+scores inside the compiled loop and keeps no per-row output
+(:func:`sideslip.methods.mkf.mkf_scores`), so the memory is that of the problem.  The grids stop at
 the largest factors checked on the simulator (a sideslip density beyond 30x typical let the
 filter chase the course noise: beta_std no longer covered the error on the race lap).
 """
@@ -84,17 +85,17 @@ def choose_noise(
     tune_beta: bool = True,
 ) -> NoiseChoice:
     """Pick the factors (module docstring).  ``prob``: an MKF problem (frozen dataclass with a
-    ``Qd`` field); ``qd_of(steer_yaw_factor, beta_factor)`` the rescaled Q_d table; ``run`` the
-    filter pass returning innovations (``gyro_innov``/``gyro_s``/``course_innov``/
-    ``course_s``).  A factor not tuned stays 1."""
-    # only the scores are kept (not the passes' state arrays): memory stays one pass
+    ``Qd`` field); ``qd_of(steer_yaw_factor, beta_factor)`` the rescaled Q_d table; ``run`` one
+    filter pass returning ``((gyro -2 ln L, gyro updates), (course -2 ln L, course updates))``
+    (:func:`neg2_log_likelihood` of each channel, e.g. :func:`sideslip.methods.mkf.mkf_scores`,
+    which keeps no per-row output).  A factor not tuned stays 1."""
+    # each grid point is run once; only its scores are kept: memory stays one pass
     cache: dict[tuple[float, float], tuple[tuple[float, int], tuple[float, int]]] = {}
 
     def scores_of(fs: float, fb: float) -> tuple[tuple[float, int], tuple[float, int]]:
         if (fs, fb) not in cache:
-            res = run(dataclasses.replace(prob, Qd=qd_of(fs, fb)))
-            cache[(fs, fb)] = (neg2_log_likelihood(res.gyro_innov, res.gyro_s),
-                               neg2_log_likelihood(res.course_innov, res.course_s))
+            gyro, course = run(dataclasses.replace(prob, Qd=qd_of(fs, fb)))
+            cache[(fs, fb)] = ((float(gyro[0]), int(gyro[1])), (float(course[0]), int(course[1])))
         return cache[(fs, fb)]
 
     fs_scores: dict[str, float] = {}

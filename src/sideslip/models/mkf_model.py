@@ -25,6 +25,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+import pandas as pd
 from numpy.typing import NDArray
 
 from sideslip.filters.discretise import discretise_batch
@@ -107,6 +108,7 @@ class ModelTable:
     ``Qd_parts`` (3,K,4,4): the discrete process noise split by source, Q_d being linear in
     Q_c (Van Loan): [0] steering + yaw-moment densities, [1] the sideslip density, [2] the
     rest (gyro-bias walk, low-speed model); ``Qd`` = their sum, :meth:`scaled_qd` rescales.
+    None when the table was built with ``split=False`` (no noise tuning).
     """
 
     Ad: FloatArray
@@ -114,19 +116,24 @@ class ModelTable:
     Qd: FloatArray
     idx: NDArray[np.intp]
     low: NDArray[np.bool_]
-    Qd_parts: FloatArray
+    Qd_parts: FloatArray | None
 
     def scaled_qd(self, steer_yaw_factor: float, beta_factor: float) -> FloatArray:
         """Q_d with the steering/yaw and sideslip densities times the given factors."""
+        if self.Qd_parts is None:
+            raise ValueError("model_table(split=False) keeps no Qd_parts to rescale")
         q = steer_yaw_factor * self.Qd_parts[0] + beta_factor * self.Qd_parts[1] + self.Qd_parts[2]
         return np.ascontiguousarray(q)
 
 
 def model_table(
-    vehicle: Vehicle, t: FloatArray, speed: FloatArray, noise: MkfNoise, v_gate: float = V_GATE
+    vehicle: Vehicle, t: FloatArray, speed: FloatArray, noise: MkfNoise, v_gate: float = V_GATE,
+    split: bool = True,
 ) -> ModelTable:
-    """Discretised models for each row step, tabulated by (quantised log-speed, dt)."""
-    n = t.size
+    """Discretised models for each row step, tabulated by (quantised log-speed, dt).
+
+    ``split``: also keep Q_d by noise source (``ModelTable.Qd_parts``, for the noise tuning;
+    three discretisations of the table instead of one)."""
     dt = np.diff(t, prepend=t[0])
     dt[0] = 0.0
     v_prev = np.concatenate(([speed[0]], speed[:-1]))
@@ -134,18 +141,20 @@ def model_table(
     vbin = np.where(low, -1, np.round(np.log(np.maximum(np.abs(v_prev), v_gate)) / SPEED_LOG_STEP))
     dbin = np.round(dt * 1e6)
     keys = (vbin + 2.0) * 2.0**32 + dbin  # exact in float64: both parts are small integers
-    ukeys, inv = np.unique(keys, return_inverse=True)
-    inv = inv.reshape(n)
+    # hash-based, O(n) (np.unique sorts all n keys); sort=True orders the K entries as np.unique
+    inv, ukeys = pd.factorize(keys, sort=True)
+    del keys, vbin, dbin, v_prev
     uniq = np.stack([np.floor(ukeys / 2.0**32) - 2.0, np.mod(ukeys, 2.0**32)], axis=1)
     k = uniq.shape[0]
     A = np.zeros((k, 4, 4))
     B = np.zeros((k, 4, 2))
-    Qc = np.zeros((3, k, 4, 4))  # by source: steer + yaw, beta, rest (ModelTable.Qd_parts)
+    n_src = 3 if split else 1
+    Qc = np.zeros((n_src, k, 4, 4))  # by source: steer + yaw, beta, rest (ModelTable.Qd_parts)
     sources = (
         MkfNoise(noise.steer_psd, 0.0, noise.yaw_accel_psd, 0.0),
         MkfNoise(0.0, noise.beta_psd, 0.0, 0.0),
         MkfNoise(0.0, 0.0, 0.0, noise.gyro_bias_psd),
-    )
+    ) if split else (noise,)  # fmt: skip
     fast = uniq[:, 0] >= 0
     if fast.any():
         speeds = np.exp(uniq[fast, 0] * SPEED_LOG_STEP)
@@ -154,17 +163,17 @@ def model_table(
             A[fast], B[fast], Qc[i, fast] = a, b, q
     if (~fast).any():
         a, b, q = low_speed_continuous(vehicle, noise)
-        A[~fast], B[~fast], Qc[2, ~fast] = a, b, q
+        A[~fast], B[~fast], Qc[n_src - 1, ~fast] = a, b, q
     dt = uniq[:, 1] * 1e-6
-    # one batch: the three noise sources share A (Q_d is linear in Q_c)
+    # one batch: the noise sources share A (Q_d is linear in Q_c)
     Ad3, Bd3, Qd3 = discretise_batch(
-        np.concatenate([A] * 3), np.concatenate([B] * 3), Qc.reshape(3 * k, 4, 4),
-        np.concatenate([dt] * 3),
+        np.concatenate([A] * n_src), np.concatenate([B] * n_src), Qc.reshape(n_src * k, 4, 4),
+        np.concatenate([dt] * n_src),
     )  # fmt: skip
-    parts = np.ascontiguousarray(Qd3.reshape(3, k, 4, 4))
+    parts = np.ascontiguousarray(Qd3.reshape(n_src, k, 4, 4))
     Ad, Bd = np.ascontiguousarray(Ad3[:k]), np.ascontiguousarray(Bd3[:k])
     Qd = np.ascontiguousarray(parts.sum(axis=0))
-    return ModelTable(Ad, Bd, Qd, inv.astype(np.intp), low, parts)
+    return ModelTable(Ad, Bd, Qd, inv.astype(np.intp, copy=False), low, parts if split else None)
 
 
 # ==========================================================================================
