@@ -205,32 +205,50 @@ def chain_kalman_into(
     chain, continued by the next call; the same arithmetic as one call over the whole chain),
     else to the last row's filtered state.
     """
-    n = Hu.shape[0]
-    M = Hu.shape[1]
     nx = Hu.shape[2]
-    n_keep = nu.shape[1]
     Q = np.zeros((nx, nx))
     work = np.empty((2 * nx + 2, nx))
-    for k in range(n):
-        for m in range(M):
-            w = wu[k, m]
-            if w == 0.0:
-                continue
-            innov = zu[k, m]
-            for i in range(nx):
-                innov -= Hu[k, m, i] * x[i]
-            s = update_scalar_ws_nb(x, P, innov, Hu[k, m], 1.0 / w, work)
-            if m < n_keep:
-                ss[k, m] = s
-                nu[k, m] = innov
+    for k in range(Hu.shape[0]):
+        _chain_update(k, x, P, Hu, zu, wu, nu, ss, work)
         for i in range(nx):
             xs[k, i] = x[i]
             vs[k, i] = P[i, i]
         cs[k] = P[0, 1]
-        if k < F.shape[0]:
-            for i in range(nx):
-                Q[i, i] = 1.0 / wq[k, i]
-            predict_ws_nb(x, P, F[k], Q, g[k], work)
+        _chain_predict(k, x, P, F, g, wq, Q, work)
+
+
+@numba.njit(cache=True)
+def _chain_update(
+    k: int, x: FloatArray, P: FloatArray, Hu: FloatArray, zu: FloatArray, wu: FloatArray,
+    nu: FloatArray, ss: FloatArray, work: FloatArray,
+) -> None:  # fmt: skip
+    """Row ``k``'s unary factors as scalar updates of ``(x, P)`` in place; the innovation and
+    its variance S of the first ``nu.shape[1]`` factors go to ``nu[k]``, ``ss[k]``."""
+    nx = Hu.shape[2]
+    for m in range(Hu.shape[1]):
+        w = wu[k, m]
+        if w == 0.0:
+            continue
+        innov = zu[k, m]
+        for i in range(nx):
+            innov -= Hu[k, m, i] * x[i]
+        s = update_scalar_ws_nb(x, P, innov, Hu[k, m], 1.0 / w, work)
+        if m < nu.shape[1]:
+            ss[k, m] = s
+            nu[k, m] = innov
+
+
+@numba.njit(cache=True)
+def _chain_predict(
+    k: int, x: FloatArray, P: FloatArray, F: FloatArray, g: FloatArray, wq: FloatArray,
+    Q: FloatArray, work: FloatArray,
+) -> None:  # fmt: skip
+    """The chain's step from row ``k`` to ``k + 1`` (when ``F`` holds it), in place; ``Q``
+    (nx, nx) scratch, its diagonal the step's variances ``1 / wq[k]``."""
+    if k < F.shape[0]:
+        for i in range(x.size):
+            Q[i, i] = 1.0 / wq[k, i]
+        predict_ws_nb(x, P, F[k], Q, g[k], work)
 
 
 @numba.njit(cache=True)
@@ -254,7 +272,6 @@ def chain_innovations(
     call from that prediction), else the last row's filtered state.
     """
     n = Hu.shape[0]
-    M = Hu.shape[1]
     nx = Hu.shape[2]
     x = x0.copy()
     P = P0.copy()
@@ -263,21 +280,8 @@ def chain_innovations(
     nu = np.full((n, n_factors), np.nan)
     ss = np.full((n, n_factors), np.nan)
     for k in range(n):
-        for m in range(M):
-            w = wu[k, m]
-            if w == 0.0:
-                continue
-            innov = zu[k, m]
-            for i in range(nx):
-                innov -= Hu[k, m, i] * x[i]
-            s = update_scalar_ws_nb(x, P, innov, Hu[k, m], 1.0 / w, work)
-            if m < n_factors:
-                ss[k, m] = s
-                nu[k, m] = innov
-        if k < F.shape[0]:
-            for i in range(nx):
-                Q[i, i] = 1.0 / wq[k, i]
-            predict_ws_nb(x, P, F[k], Q, g[k], work)
+        _chain_update(k, x, P, Hu, zu, wu, nu, ss, work)
+        _chain_predict(k, x, P, F, g, wq, Q, work)
     return nu, ss, x, P
 
 
