@@ -90,7 +90,6 @@ def _assemble_into(
 ) -> None:
     """:func:`assemble_chain` into preallocated (zeroed here) ``ab`` and ``rhs``."""
     N = Hu.shape[0]
-    M = Hu.shape[1]
     nx = Hu.shape[2]
     ab[:, :] = 0.0
     rhs[:] = 0.0
@@ -99,9 +98,38 @@ def _assemble_into(
         rhs[i] += eta0[i]
         for j in range(i + 1):
             ab[i - j, j] += Lam0[i, j]
-    # unary factors
-    for k in range(N):
-        o = k * nx
+    add_chain_factors(ab, rhs, F[: N - 1], g, wq, Hu, zu, wu, 0, 0)
+
+
+@numba.njit(cache=True)
+def add_chain_factors(
+    ab: FloatArray,
+    rhs: FloatArray,
+    F: FloatArray,
+    g: FloatArray,
+    wq: FloatArray,
+    Hu: FloatArray,
+    zu: FloatArray,
+    wu: FloatArray,
+    first_state: int,
+    first_unary: int,
+) -> None:
+    """Add one chunk of the chain factors to the banded normal equations ``ab``, ``rhs`` of
+    the whole chain (layout and arithmetic of :func:`assemble_chain`, which
+    calls it for the whole chain; without the prior, which the caller adds first).
+
+    Local row k is state ``first_state + k``; the unary factors of the rows from
+    ``first_unary`` on and every dynamic factor of ``F`` (k to k + 1) are added.  A chunk that
+    adds the unary factors of states a .. b-1 and the dynamic factors a-1 .. b-2 (those into
+    its states) adds to each entry in the same order as one assembly of the whole chain (the
+    unary factors of a state, then the dynamic factor into it, then the one out of it), so
+    the sums are bit-identical however the chain is chunked.
+    """
+    N = Hu.shape[0]
+    M = Hu.shape[1]
+    nx = Hu.shape[2]
+    for k in range(first_unary, N):
+        o = (first_state + k) * nx
         for m in range(M):
             w = wu[k, m]
             if w == 0.0:
@@ -111,19 +139,16 @@ def _assemble_into(
                 rhs[o + i] += w * hi * zu[k, m]
                 for j in range(i + 1):
                     ab[i - j, o + j] += w * hi * Hu[k, m, j]
-    # dynamic factors: residual e = x_{k+1} - F_k x_k - g_k
-    for k in range(N - 1):
-        o = k * nx
+    for k in range(F.shape[0]):
+        o = (first_state + k) * nx
         o1 = o + nx
         for c in range(nx):
             w = wq[k, c]
-            # row c of J: -F_k[c, :] on x_k, +1 at component c of x_{k+1}; target g_k[c]
             for i in range(nx):
                 fi = F[k, c, i]
                 rhs[o + i] -= w * fi * g[k, c]
                 for j in range(i + 1):
                     ab[i - j, o + j] += w * fi * F[k, c, j]
-                # coupling H[x_{k+1, c}, x_{k, i}] = -w F[c, i]  (row index o1 + c > o + i)
                 ab[o1 + c - (o + i), o + i] -= w * fi
             ab[0, o1 + c] += w
             rhs[o1 + c] += w * g[k, c]

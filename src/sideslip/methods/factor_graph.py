@@ -89,8 +89,8 @@ from numpy.typing import NDArray
 
 from sideslip.drive import Drive
 from sideslip.estimate import Estimate
-from sideslip.filters.banded import fixed_lag_chain, solve_chain
-from sideslip.methods.fg_kernels import add_chain_factors, band_marginals, chain_factors, one_sigma
+from sideslip.filters.banded import add_chain_factors, fixed_lag_chain, solve_chain
+from sideslip.methods.fg_kernels import band_marginals, chain_factors, one_sigma
 from sideslip.methods.fg_settings import DEFAULT_SETTINGS, FactorGraphSettings
 from sideslip.methods.fg_tuning import (
     BLOCK_S,
@@ -368,7 +368,7 @@ def _batch_pass(
     prep: Prepared, vehicle: Vehicle, with_innovations: bool, chunk: int = GRAPH_CHUNK
 ) -> tuple[FloatArray, FloatArray, FloatArray, tuple[FloatArray, FloatArray] | None]:
     """:func:`solve_batch` of the prepared graph assembled chunk by chunk (bit-identical,
-    :func:`sideslip.methods.fg_kernels.add_chain_factors`), with ``with_innovations`` the
+    :func:`sideslip.filters.banded.add_chain_factors`), with ``with_innovations`` the
     graph's Kalman innovations of the gyro and a_y factors from the same chunks (the numbers
     of one :func:`~sideslip.methods.fg_tuning.chain_innovations` pass): the normal equations
     (64 B/row) are the only whole-drive array besides the outputs."""

@@ -133,59 +133,6 @@ def one_sigma(
 
 
 @numba.njit(cache=True)
-def add_chain_factors(
-    ab: FloatArray,
-    rhs: FloatArray,
-    F: FloatArray,
-    g: FloatArray,
-    wq: FloatArray,
-    Hu: FloatArray,
-    zu: FloatArray,
-    wu: FloatArray,
-    first_state: int,
-    first_unary: int,
-) -> None:
-    """Add one chunk of the chain factors to the banded normal equations ``ab``, ``rhs`` of
-    the whole chain (layout and arithmetic of :func:`sideslip.filters.banded.assemble_chain`,
-    without the prior, which the caller adds first).
-
-    Local row k is state ``first_state + k``; the unary factors of the rows from
-    ``first_unary`` on and every dynamic factor of ``F`` (k to k + 1) are added.  A chunk that
-    adds the unary factors of states a .. b-1 and the dynamic factors a-1 .. b-2 (those into
-    its states) adds to each entry in the same order as one assembly of the whole chain (the
-    unary factors of a state, then the dynamic factor into it, then the one out of it), so
-    the sums are bit-identical however the chain is chunked.
-    """
-    N = Hu.shape[0]
-    M = Hu.shape[1]
-    nx = Hu.shape[2]
-    for k in range(first_unary, N):
-        o = (first_state + k) * nx
-        for m in range(M):
-            w = wu[k, m]
-            if w == 0.0:
-                continue
-            for i in range(nx):
-                hi = Hu[k, m, i]
-                rhs[o + i] += w * hi * zu[k, m]
-                for j in range(i + 1):
-                    ab[i - j, o + j] += w * hi * Hu[k, m, j]
-    for k in range(F.shape[0]):
-        o = (first_state + k) * nx
-        o1 = o + nx
-        for c in range(nx):
-            w = wq[k, c]
-            for i in range(nx):
-                fi = F[k, c, i]
-                rhs[o + i] -= w * fi * g[k, c]
-                for j in range(i + 1):
-                    ab[i - j, o + j] += w * fi * F[k, c, j]
-                ab[o1 + c - (o + i), o + i] -= w * fi
-            ab[0, o1 + c] += w
-            rhs[o1 + c] += w * g[k, c]
-
-
-@numba.njit(cache=True)
 def band_marginals(cb: FloatArray, nx: int) -> tuple[FloatArray, FloatArray]:
     """Marginal variances (N, nx) and the covariance of each state's first two components
     (N,) from the lower Cholesky band ``cb`` of the chain's normal matrix: the Takahashi
