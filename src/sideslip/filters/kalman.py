@@ -196,7 +196,20 @@ def update_scalar_ws_nb(
     ``work`` (at least 2 rows of n) holds P h' and the gain.  A non-positive S (no
     information, or a broken prior) leaves x and P unchanged.
     """
-    n = x.size
+    s = cross_covariance_nb(P, h, r, work)
+    if not s > 0.0:
+        return s
+    for i in range(x.size):
+        work[1, i] = work[0, i] / s
+        x[i] += work[1, i] * innov
+    joseph_rank1_nb(P, work, s)
+    return s
+
+
+@numba.njit(cache=True)
+def cross_covariance_nb(P: NDArray, h: NDArray, r: float, work: NDArray) -> float:
+    """``work[0] = P h'`` (skipping the zero entries of ``h``); returns S = h P h' + r."""
+    n = P.shape[0]
     for i in range(n):
         work[0, i] = 0.0
     for j in range(n):
@@ -207,18 +220,21 @@ def update_scalar_ws_nb(
     s = r
     for i in range(n):
         s += h[i] * work[0, i]
-    if not s > 0.0:
-        return s
-    for i in range(n):
-        work[1, i] = work[0, i] / s
-        x[i] += work[1, i] * innov
+    return s
+
+
+@numba.njit(cache=True)
+def joseph_rank1_nb(P: NDArray, work: NDArray, s: float) -> None:
+    """The Joseph covariance of a scalar update with any gain ``k = work[1]`` (``work[0]`` =
+    P h', ``s`` = S): ``P - k (Ph)' - (Ph) k' + S k k'`` (Simon 2006, eq 5.19), on the upper
+    triangle and mirrored, in place."""
+    n = P.shape[0]
     for i in range(n):
         ki, phi = work[1, i], work[0, i]
         for j in range(i, n):
             m = P[i, j] - ki * work[0, j] - phi * work[1, j] + s * ki * work[1, j]
             P[i, j] = m
             P[j, i] = m
-    return s
 
 
 @numba.njit(cache=True)

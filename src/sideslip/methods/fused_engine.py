@@ -21,6 +21,7 @@ import math
 import numba
 import numpy as np
 
+from sideslip.filters.consider import robust_consider_nb
 from sideslip.filters.kalman import (
     pack_upper_nb,
     predict_rows_ws_nb,
@@ -31,7 +32,7 @@ from sideslip.filters.kalman import (
     update_robust_scalar_ws_nb,
 )
 from sideslip.gnss import gauss_markov_nb
-from sideslip.methods.fused_updates import robust_consider_nb, wheel_slip_ratio
+from sideslip.methods.fused_updates import wheel_slip_ratio
 from sideslip.models.fused_measurements import (
     A_LF,
     A_LR,
