@@ -5,7 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from sideslip.filters import kalman
 from sideslip.filters.kalman import (
+    NX_UNROLLED,
     cholesky_nb,
     pack_upper_nb,
     predict_nb,
@@ -78,7 +80,7 @@ def _spd(rng: np.random.Generator, n: int) -> np.ndarray:
     return L @ L.T + 0.5 * np.eye(n)
 
 
-@pytest.mark.parametrize("n", [1, 3, 8, 14])
+@pytest.mark.parametrize("n", [1, 3, 8, 14, 15, 18])
 def test_scalar_joseph_kernel_matches_numpy_reference(n: int) -> None:
     rng = np.random.default_rng(10 + n)
     for _ in range(5):
@@ -134,7 +136,7 @@ def test_sparse_predict_matches_dense_predict() -> None:
     np.testing.assert_array_equal(xs, x_next)
 
 
-@pytest.mark.parametrize("n", [1, 4, 14])
+@pytest.mark.parametrize("n", [1, 4, 14, 15, 18])
 def test_cholesky_kernel_matches_numpy(n: int) -> None:
     rng = np.random.default_rng(30 + n)
     A = _spd(rng, n)
@@ -216,7 +218,7 @@ def test_rts_kernel_matches_numpy_and_beats_the_filter_on_truth() -> None:
     assert 0.75 < nees < 1.3
 
 
-@pytest.mark.parametrize("n", [2, 5])
+@pytest.mark.parametrize("n", [2, 5, 15, 18])
 def test_scratch_space_kernels_match_the_allocating_ones(n: int) -> None:
     rng = np.random.default_rng(40 + n)
     work = workspace(n)
@@ -319,3 +321,44 @@ def test_rts_step_equals_the_textbook_smoother() -> None:
     np.testing.assert_allclose(x2, x_ref, rtol=1e-8, atol=1e-10)
     np.testing.assert_allclose(P2, P_ref, rtol=1e-7, atol=1e-10)
     assert np.array_equal(P2, P2.T)
+
+
+@pytest.mark.parametrize("n", NX_UNROLLED)
+def test_unrolled_kernels_are_bit_identical_to_the_general_loop(n: int) -> None:
+    """The dispatchers pass ``n`` as a literal for these sizes; the bodies called from Python
+    take it at run time (the general loop): the same operations, so the same bits."""
+    rng = np.random.default_rng(n)
+    P, Pn, Ps_next = _spd(rng, n), _spd(rng, n), _spd(rng, n)
+    x, xn, xs_next, h = (rng.normal(size=n) for _ in range(4))
+    B = 0.1 * rng.normal(size=(n, n))
+    F = np.eye(n) + np.diag(0.1 * rng.normal(size=n - 1), 1)
+    rows = np.full((n, n), -1, dtype=np.int64)
+    kalman.nonzero_columns_nb(F, rows)
+    pairs = []
+    x1, P1, x2, P2 = x.copy(), P.copy(), x.copy(), P.copy()
+    kalman.rts_update_ws_nb(x1, P1, xn, Pn, B, xs_next, Ps_next, np.zeros((n, n)))
+    kalman._rts_update_ws_nb_n(x2, P2, xn, Pn, B, xs_next, Ps_next, np.zeros((n, n)), n)
+    pairs += [(x1, x2), (P1, P2)]
+    w1, w2 = np.zeros((2, n)), np.zeros((2, n))
+    s1 = kalman.cross_covariance_nb(P, h, 0.3, w1)
+    s2 = kalman._cross_covariance_nb_n(P, h, 0.3, w2, n)
+    w1[1], w2[1] = w1[0] / s1, w2[0] / s2
+    P1, P2 = P.copy(), P.copy()
+    kalman.joseph_rank1_nb(P1, w1, s1)
+    kalman._joseph_rank1_nb_n(P2, w2, s2, n)
+    pairs += [(np.array([s1]), np.array([s2])), (P1, P2)]
+    L1, L2 = np.zeros((n, n)), np.zeros((n, n))
+    kalman.cholesky_ws_nb(Pn, L1)
+    kalman._cholesky_ws_nb_n(Pn, L2, n)
+    B1, B2 = P.copy(), P.copy()
+    kalman.cho_solve_rows_ws_nb(L1, B1)
+    kalman._cho_solve_rows_ws_nb_n(L2, B2, n, n)
+    pairs += [(L1, L2), (B1, B2)]
+    q = rng.uniform(0, 1e-3, n)
+    Q1, Q2 = np.zeros((n, n)), np.zeros((n, n))
+    kalman.predict_rows_ws_nb(P, F, rows, q, Q1, np.zeros((n, n)))
+    kalman._predict_rows_ws_nb_n(P, F, rows, q, Q2, np.zeros((n, n)), n)
+    pairs.append((Q1, Q2))
+    for a, b in pairs:
+        np.testing.assert_array_equal(a, b)
+    np.testing.assert_allclose(B1, np.linalg.solve(Pn, P), rtol=1e-9, atol=1e-12)
