@@ -72,6 +72,11 @@ GEODETIC = {
 # Fewest rows a drive may have: every method needs one step of time (two stamps); a one-row
 # table holds no motion and ends in singular least-squares systems.
 MIN_ROWS = 2
+# A long drive (rows; 5.6 h at 100 Hz): the CLI reads it compact by default (the sensor
+# channels in single precision, :meth:`Drive.compact`, a relative rounding of 6e-8, far below
+# any sensor's noise), and methods trade a little time for memory on it (e.g. ``fused``
+# recomputes per-row inputs instead of holding them), so a day-long drive fits in 4 GB.
+LONG_DRIVE_ROWS = 2_000_000
 
 # Evident-unit limits (section 5): |value| beyond the limit means a wrong unit.
 LIMITS: list[tuple[tuple[str, ...], float, str]] = [

@@ -8,12 +8,8 @@ from typing import Annotated, Any
 import typer
 
 from sideslip.cli.app import app, guarded
+from sideslip.drive import LONG_DRIVE_ROWS
 from sideslip.errors import InputError
-
-# Drives longer than this (rows; 5.6 h at 100 Hz) are read compact by default: the sensor
-# channels in single precision (:meth:`sideslip.drive.Drive.compact`, a relative rounding of
-# 6e-8, far below any sensor's noise), so a day-long drive and a method fit in 4 GB.
-LONG_DRIVE_ROWS = 2_000_000
 
 
 def settings_from_cli(config: Path | None, assignments: list[str] | None) -> dict[str, Any]:

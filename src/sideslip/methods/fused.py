@@ -64,7 +64,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sideslip import gnss
-from sideslip.drive import Drive
+from sideslip.drive import LONG_DRIVE_ROWS, Drive
 from sideslip.estimate import Estimate
 from sideslip.filters.consistency import nis_consistency
 from sideslip.methods import fused_engine as eng
@@ -306,6 +306,10 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     n = len(drive)
     wz, ax, ay = _hold(drive, "wz"), _hold(drive, "ax"), _hold(drive, "ay")
     wx, wy = _hold(drive, "wx"), _hold(drive, "wy")
+    # on a long drive the per-row IMU inputs are rebuilt after the node pass (the same
+    # arithmetic, so the same bits) instead of held through it: 5 x 8 bytes a row less at the
+    # pass's peak (the filtered covariances), a few ms per hour of drive
+    rebuild = n > LONG_DRIVE_ROWS
     raw = speed_raw(drive)
     # signed: a drive whose wheel speeds carry the sign reverses correctly; one with magnitudes
     # only is taken as driving forwards (GNSS then disagrees, and the Huber weights limit harm)
@@ -357,10 +361,17 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     x0, P0 = _initial_state(drive, vw, nx, nz)
     q = _process_psd(nx, nz)
     lever = np.array(vehicle.gnss_xyz, dtype=float)
-    node_inputs = (f_front[idx], f_rear[idx], delta[idx], mu_floor[idx], steady[idx], force_var[idx])
+    every_row = idx.size == n  # the causal filter: nodes are the rows (no copies)
+    node_inputs = tuple(
+        a if every_row else a[idx] for a in (f_front, f_rear, delta, mu_floor, steady, force_var)
+    )
     # the per-row node inputs are no longer needed: free them before the filter runs
     del f_front, f_rear, delta, mu_floor, steady, force_var, jerk, r_dot, r_dot_lp, vw, raw, wx
-    xs, var, cov_vxvy, nis, counts = eng.run_nodes(
+    if smooth or rebuild:  # the smoother's outputs interpolate the nodes: no row ax, ay
+        del ax, ay
+    if rebuild:
+        del wz, wy, fy_lp
+    xs, var, var_last, cov_vxvy, nis, counts = eng.run_nodes(
         tn, U, vw_n, *node_inputs, g_node, g_age, gn["gnss_e"], gn["gnss_n"], gn["pstd"],
         gn["gnss_ve"], gn["gnss_vn"], gn["vstd"], x0, P0, q, f_rows(nx), geom, lever,
         _config(nz, k_phi, calibrate, has_vel), smooth,
@@ -372,28 +383,57 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     dof = np.where(np.isfinite(chan), dof_per, 0.0).sum(axis=1)
     nis_sum = np.where(np.isfinite(chan), chan, 0.0).sum(axis=1)
     cons = nis_consistency(tn, nis_sum, dof, window_s=nz.health_window_s, causal=not smooth)
+    del chan, dof, nis_sum
+    nis = nis.astype(np.float32)  # kept for the innovation diagnostics, which are float32
     # series output on every row (position only with fixes, yaw only with GNSS: without
     # them neither is observable); the others (AUX_KEYS) enter the row outputs from the nodes
     keep = [IVX, IVY, IBG] + ([IPSI] if has_pos or has_vel else []) + ([IE, IN] if has_pos else [])
-    nodes: dict[Any, FloatArray] = {i: xs[:, i] for i in keep}
-    # 1-sigma of yaw and position at the nodes, interpolated as such (no per-row variances)
-    nodes.update({("std", i): np.sqrt(np.maximum(var[:, i], 0.0)) for i in keep if i in (IE, IN, IPSI)})
-    nodes.update(health=cons.health)
-    aux: dict[Any, FloatArray] = {i: xs[:, i] for i in (ICY, ICX, ISG, ISR)}
-    aux.update({("var", i): var[:, i] for i in (IVX, IVY, ISR)})
-    aux.update(cvv=cov_vxvy, inflation=cons.inflation)
-    aux_nodes = np.stack([aux[k] for k in AUX_KEYS])
+    vc = eng.VAR_COLUMN
+    # 1-sigma of yaw and position at the nodes, interpolated as such (no per-row variances);
+    # each table is one stacked array (the compiled row passes read it whole), the dicts views
+    node_keys = [*keep, *(("std", i) for i in keep if i in (IE, IN, IPSI)), "health"]
+    node_vals = np.empty((len(node_keys), tn.size))
+    for m, key in enumerate(node_keys):
+        if key == "health":
+            node_vals[m] = cons.health
+        elif isinstance(key, tuple):
+            np.sqrt(np.maximum(var[:, vc[key[1]]], 0.0), out=node_vals[m])
+        else:
+            node_vals[m] = xs[:, key]
+    nodes: dict[Any, FloatArray] = dict(zip(node_keys, node_vals, strict=True))
+    aux_nodes = np.empty((len(AUX_KEYS), tn.size))
+    for m, key in enumerate(AUX_KEYS):
+        if key == "cvv":
+            aux_nodes[m] = cov_vxvy
+        elif key == "inflation":
+            aux_nodes[m] = cons.inflation
+        elif isinstance(key, tuple):
+            aux_nodes[m] = var[:, vc[key[1]]]
+        else:
+            aux_nodes[m] = xs[:, key]
+    aux: dict[Any, FloatArray] = dict(zip(AUX_KEYS, aux_nodes, strict=True))
+    node_params = _node_params(vehicle, smooth, xs, var[:, vc[IMU]], var_last, counts, cons, tn, k_phi, notes)
+    del xs, var, cov_vxvy  # the row outputs need only the columns copied above
+    if rebuild:
+        wz, wy = _hold(drive, "wz"), _hold(drive, "wy")
+        ay = _hold(drive, "ay")
+        fy_lp = _low_pass(t, ay * (1.0 - G * k_phi), tau_f)
+        if smooth:
+            del ay
+        else:
+            ax = _hold(drive, "ax")
     if smooth:  # linear interpolation of the smoothed nodes
-        del ax, ay  # (the causal output's propagation only)
         j, w = _node_weights(t, tn)
-        rows = dict(zip(nodes, eng.interp_rows(j, w, np.stack(list(nodes.values()))), strict=True))
+        rows = dict(zip(nodes, eng.interp_rows(j, w, node_vals), strict=True))
     else:  # causal: the last node, propagated to the row with the row's IMU sample
         j = (np.searchsorted(idx, np.arange(n), side="right") - 1).clip(0).astype(np.int32)
         w = np.zeros(n, dtype=np.float32)
-        rows = _propagate_causal(t, tn, j, nodes, aux, wz, wy, ax, ay, fy_lp, k_phi)
+        rows = _propagate_causal(t, tn, j, node_keys, node_vals, aux, wz, wy, ax, ay, fy_lp, k_phi)
+        del ax, ay
+    del nodes, node_vals, aux  # the row outputs hold what the series need
     est = _estimate(
-        drive, vehicle, smooth, nz, rows, (j, w, aux_nodes), xs, var, cons, tn, counts,
-        k_phi, fy_lp, wz, wy, has_pos, has_vel, use_front, notes,
+        drive, vehicle, smooth, nz, rows, (j, w, aux_nodes), node_params, k_phi, fy_lp, wz, wy,
+        has_pos, has_vel, use_front,
     )  # fmt: skip
     return Estimate(est.method, est.t, est.series, est.params, _innovations(n, idx, nis))
 
@@ -441,7 +481,8 @@ def _propagate_causal(
     t: FloatArray,
     tn: FloatArray,
     j: NDArray[np.int32],
-    nodes: dict[Any, FloatArray],
+    keys: list[Any],
+    node_vals: FloatArray,
     aux: dict[Any, FloatArray],
     wz: FloatArray,
     wy: FloatArray,
@@ -452,16 +493,68 @@ def _propagate_causal(
 ) -> dict[Any, FloatArray]:
     """Filter output on every row from the latest node at or before it: one Euler step of
     the process model over the (< one node step) gap with the row's own IMU sample, in one
-    compiled pass (:func:`sideslip.methods.fused_engine.propagate_rows`)."""
-    keys = list(nodes)
+    compiled pass (:func:`sideslip.methods.fused_engine.propagate_rows`); ``node_vals`` holds
+    the node values of ``keys``, one row each."""
     pos = {k: i for i, k in enumerate(keys)}
     out = eng.propagate_rows(
-        t, tn, j, np.stack(list(nodes.values())), aux[ICY], aux[ICX], aux[ISG], wz, wy, ax, ay,
+        t, tn, j, node_vals, aux[ICY], aux[ICX], aux[ISG], wz, wy, ax, ay,
         fy_lp, k_phi, pos[IVX], pos[IVY], pos[IBG], pos.get(IPSI, -1), pos.get(IE, -1),
         pos.get(IN, -1),
     )  # fmt: skip
     rows = dict(zip(keys, out, strict=True))
     return rows
+
+
+def _node_params(
+    vehicle: Vehicle,
+    smooth: bool,
+    xs: FloatArray,
+    var_mu: FloatArray,
+    var_last: FloatArray,
+    counts: NDArray[np.int64],
+    cons: Any,
+    tn: FloatArray,
+    k_phi: float,
+    notes: dict[str, str],
+) -> dict[str, Any]:
+    """The params :func:`fuse` reads off the node states ``xs``, mu's variance ``var_mu`` and
+    the last node's variances ``var_last`` (calibration, stiffness, mu, update counts, health
+    spans): the median over the drive for the smoother, the last node for the causal filter."""
+    sd = np.sqrt(np.maximum(var_last, 0.0))  # the last node's 1-sigma
+    pick = (lambda a: float(np.median(a))) if smooth else (lambda a: float(a[-1]))
+    geom, _, _ = axle_geometry(vehicle)
+    params: dict[str, Any] = {
+        "node_step_s": float(np.median(np.diff(tn))) if tn.size > 1 else 0.0,
+        "wheel_speed_scale": pick(xs[:, ISW]),
+        "wheel_speed_scale_factor": pick(xs[:, ISW]),  # the same (measured / true), older name
+        "gyro_bias_rad_s": float(xs[-1, IBG]),
+        "gyro_bias_rad_s_sigma": float(sd[IBG]),
+        "gyro_scale": 1.0 / (1.0 - pick(xs[:, ISG])),
+        "front_stiffness_scale": pick(xs[:, ISF]),
+        "front_stiffness_scale_sigma": float(sd[ISF]),
+        "rear_stiffness_scale": pick(xs[:, ISR]),
+        "rear_stiffness_scale_sigma": float(sd[ISR]),
+        "slip_gain_k_s2_m": float(geom[0] / ((geom[0] + geom[1]) * geom[3] * pick(xs[:, ISR]))),
+        "slip_gain_k_prior_s2_m": float(geom[0] / ((geom[0] + geom[1]) * geom[3])),
+        "mu": pick(xs[:, IMU]),
+        "mu_sigma": float(np.sqrt(max(np.median(var_mu), 0.0))),
+        "roll_gain_rad_per_m_s2": k_phi,
+        "gnss_updates_accepted": int(counts[0]),
+        "gnss_updates_downweighted": int(counts[1]),
+        "axle_updates_accepted": int(counts[2]),
+        "axle_updates_downweighted": int(counts[3]),
+        "health": cons.summary(tn),
+        "assumed": notes,
+    }
+    if xs.shape[1] > NX_CORE:
+        lever = np.array(vehicle.gnss_xyz, dtype=float)
+        params.update(
+            gnss_latency_s=pick(xs[:, ITAU]),
+            gnss_latency_s_sigma=float(sd[ITAU]),
+            gnss_lever_arm_xy_m=[float(lever[0] + pick(xs[:, ILX])), float(lever[1] + pick(xs[:, ILY]))],
+            gnss_lever_arm_xy_m_sigma=[float(sd[ILX]), float(sd[ILY])],
+        )
+    return params
 
 
 def _estimate(
@@ -471,11 +564,7 @@ def _estimate(
     nz: FusedSettings,
     rows: dict[Any, FloatArray],
     aux: tuple[NDArray[np.int32], NDArray[np.float32], FloatArray],
-    xs: FloatArray,
-    var: FloatArray,
-    cons: Any,
-    tn: FloatArray,
-    counts: NDArray[np.int64],
+    node_params: dict[str, Any],
     k_phi: float,
     fy_lp: FloatArray,
     wz: FloatArray,
@@ -483,11 +572,10 @@ def _estimate(
     has_pos: bool,
     has_vel: bool,
     use_front: bool,
-    notes: dict[str, str],
 ) -> Estimate:
     """Output series (from the per-row ``rows`` and, through ``aux = (j, w, node values of
-    AUX_KEYS)``, the node-level terms of beta_std and the attitude) and params (from the
-    nodes) of :func:`fuse`."""
+    AUX_KEYS)``, the node-level terms of beta_std and the attitude) and params (the cues,
+    then ``node_params`` of :func:`_node_params`) of :func:`fuse`."""
     t = drive.t
     vx, vy = rows[IVX], rows[IVY]
     geom_v, _, _ = axle_geometry(vehicle)
@@ -522,42 +610,7 @@ def _estimate(
         cues.append("gnss_doppler")
     if has_pos:
         cues.append("gnss_position")
-    sd = np.sqrt(np.maximum(var[-1], 0.0))  # the last node's 1-sigma (no whole-drive copy)
-    pick = (lambda a: float(np.median(a))) if smooth else (lambda a: float(a[-1]))
-    geom, _, _ = axle_geometry(vehicle)
-    params: dict[str, Any] = {
-        "cues": cues,
-        "smoothed": smooth,
-        "node_step_s": float(np.median(np.diff(tn))) if tn.size > 1 else 0.0,
-        "wheel_speed_scale": pick(xs[:, ISW]),
-        "wheel_speed_scale_factor": pick(xs[:, ISW]),  # the same (measured / true), older name
-        "gyro_bias_rad_s": float(xs[-1, IBG]),
-        "gyro_bias_rad_s_sigma": float(sd[IBG]),
-        "gyro_scale": 1.0 / (1.0 - pick(xs[:, ISG])),
-        "front_stiffness_scale": pick(xs[:, ISF]),
-        "front_stiffness_scale_sigma": float(sd[ISF]),
-        "rear_stiffness_scale": pick(xs[:, ISR]),
-        "rear_stiffness_scale_sigma": float(sd[ISR]),
-        "slip_gain_k_s2_m": float(geom[0] / ((geom[0] + geom[1]) * geom[3] * pick(xs[:, ISR]))),
-        "slip_gain_k_prior_s2_m": float(geom[0] / ((geom[0] + geom[1]) * geom[3])),
-        "mu": pick(xs[:, IMU]),
-        "mu_sigma": float(np.sqrt(max(np.median(var[:, IMU]), 0.0))),
-        "roll_gain_rad_per_m_s2": k_phi,
-        "gnss_updates_accepted": int(counts[0]),
-        "gnss_updates_downweighted": int(counts[1]),
-        "axle_updates_accepted": int(counts[2]),
-        "axle_updates_downweighted": int(counts[3]),
-        "health": cons.summary(tn),
-        "assumed": notes,
-    }
-    if xs.shape[1] > NX_CORE:
-        lever = np.array(vehicle.gnss_xyz, dtype=float)
-        params.update(
-            gnss_latency_s=pick(xs[:, ITAU]),
-            gnss_latency_s_sigma=float(sd[ITAU]),
-            gnss_lever_arm_xy_m=[float(lever[0] + pick(xs[:, ILX])), float(lever[1] + pick(xs[:, ILY]))],
-            gnss_lever_arm_xy_m_sigma=[float(sd[ILX]), float(sd[ILY])],
-        )
+    params: dict[str, Any] = {"cues": cues, "smoothed": smooth, **node_params}
     return Estimate("fused" if smooth else "fused_filter", t, series, params)
 
 

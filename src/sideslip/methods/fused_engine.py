@@ -45,7 +45,22 @@ from sideslip.models.fused_measurements import (
     standstill_yaw_rate,
     wheel_speed,
 )
-from sideslip.models.fused_process import ICX, IMU, IPE, IPN, ISF, ISR, IVX, IVY, U_AX, process_into, yaw_rate
+from sideslip.models.fused_process import (
+    ICX,
+    IE,
+    IMU,
+    IN,
+    IPE,
+    IPN,
+    IPSI,
+    ISF,
+    ISR,
+    IVX,
+    IVY,
+    U_AX,
+    process_into,
+    yaw_rate,
+)  # fmt: skip
 from sideslip.vehicle import G
 
 # indices of the loop's configuration vector (filled by sideslip.methods.fused)
@@ -76,6 +91,12 @@ from sideslip.vehicle import G
     C_WHEEL_SLIP_STIFFNESS,
 ) = range(24)
 N_CFG = 24
+
+# the states whose variance is kept at every node (the outputs' sigmas, the beta_std terms and
+# mu's params); ``VAR_COLUMN[state]`` is its column in the node variances.  The full diagonal
+# is returned for the last node only.
+VAR_STATES = np.array([IE, IN, IPSI, IVX, IVY, ISR, IMU], dtype=np.int64)
+VAR_COLUMN = {int(state): m for m, state in enumerate(VAR_STATES)}
 
 # innovation channels recorded per node (NIS, NaN where none)
 K_WHEEL, K_REAR, K_FRONT, K_GNSS_VEL, K_GNSS_POS = range(5)
@@ -171,9 +192,10 @@ def forward_nodes(
 ):
     """Forward EKF over the nodes; see the module docstring.
 
-    Returns ``(xs, Ps, var, cov_vxvy, nis, counts)``: filtered states (N, nx), (``smooth``)
-    their covariances' packed float32 upper triangles (N, nx (nx + 1) / 2), the variances, the
-    v_x-v_y covariance, the NIS per channel (N, N_CHANNELS), and counts
+    Returns ``(xs, Ps, var, var_last, cov_vxvy, nis, counts)``: filtered states (N, nx),
+    (``smooth``) their covariances' packed float32 upper triangles (N, nx (nx + 1) / 2), the
+    variances of :data:`VAR_STATES` (N, len), the last node's whole diagonal (nx), the v_x-v_y
+    covariance, the NIS per channel (N, N_CHANNELS), and counts
     ``[gnss accepted, gnss down-weighted, axle accepted, axle down-weighted]``.
     """
     N = tn.size
@@ -181,7 +203,8 @@ def forward_nodes(
     npk = nx * (nx + 1) // 2
     xs = np.zeros((N, nx))
     Ps = np.zeros((N if smooth else 1, npk), dtype=np.float32)
-    var = np.zeros((N, nx))
+    var = np.zeros((N, VAR_STATES.size))
+    var_last = np.zeros(nx)
     cov_vxvy = np.zeros(N)
     nis = np.full((N, N_CHANNELS), np.nan)
     counts = np.zeros(4, dtype=np.int64)
@@ -322,10 +345,12 @@ def forward_nodes(
         xs[k] = x
         if smooth:
             pack_upper_nb(P, Ps[k])
-        for i in range(nx):
-            var[k, i] = P[i, i]
+        for m in range(VAR_STATES.size):
+            var[k, m] = P[VAR_STATES[m], VAR_STATES[m]]
         cov_vxvy[k] = P[IVX, IVY]
-    return xs, Ps, var, cov_vxvy, nis, counts
+    for i in range(nx):
+        var_last[i] = P[i, i]
+    return xs, Ps, var, var_last, cov_vxvy, nis, counts
 
 
 @numba.njit(cache=True, nogil=True)
@@ -353,7 +378,8 @@ def smoother_gains(k0, k1, xs, Ps, U, tn, cfg, q, rows, XN, PN, B):
 def smoother_recursion(k0, k1, xs, Ps, XN, PN, B, Ps_next, var, cov_vxvy):
     """The RTS recursion from node k1 - 1 down to k0 with the gains of :func:`smoother_gains`;
     ``xs[k1]`` and ``Ps_next`` hold the smoothed node k1 on entry, node k0 on return.
-    Writes the smoothed states into ``xs``, their variances and the v_x-v_y covariance."""
+    Writes the smoothed states into ``xs``, the variances of :data:`VAR_STATES` into ``var``
+    and the v_x-v_y covariance."""
     nx = xs.shape[1]
     Pk = np.zeros((nx, nx))
     xk = np.zeros(nx)
@@ -364,8 +390,8 @@ def smoother_recursion(k0, k1, xs, Ps, XN, PN, B, Ps_next, var, cov_vxvy):
         xk[:] = xs[k]
         rts_update_ws_nb(xk, Pk, XN[j], PN[j], B[j], xs[k + 1], Ps_next, T)
         xs[k] = xk
-        for i in range(nx):
-            var[k, i] = max(Pk[i, i], 1e-18)
+        for m in range(VAR_STATES.size):
+            var[k, m] = max(Pk[VAR_STATES[m], VAR_STATES[m]], 1e-18)
         cov_vxvy[k] = Pk[IVX, IVY]
         Ps_next[:, :] = Pk
 
@@ -378,7 +404,8 @@ def run_nodes(
     g_ve, g_vn, g_vstd, x0, P0, q, rows, axle, lever, cfg, smooth,
 ):  # fmt: skip
     """Forward EKF (:func:`forward_nodes`, same arguments) and, when ``smooth``, the RTS
-    smoother; returns ``(xs, var, cov_vxvy, nis, counts)``.
+    smoother; returns ``(xs, var, var_last, cov_vxvy, nis, counts)`` (as :func:`forward_nodes`;
+    the last node's smoothed covariance is its filtered one).
 
     The smoother runs backwards in blocks of :data:`SMOOTHER_CHUNK` nodes: the gains of the
     next (earlier) block are computed on a second thread while this block's recursion runs
@@ -386,13 +413,13 @@ def run_nodes(
     sequential pass."""
     from concurrent.futures import ThreadPoolExecutor
 
-    xs, Ps, var, cov_vxvy, nis, counts = forward_nodes(
+    xs, Ps, var, var_last, cov_vxvy, nis, counts = forward_nodes(
         tn, U, vw, f_front, f_rear, delta, mu_floor, steady, force_var, g_node, g_age, g_e, g_n, g_pstd,
         g_ve, g_vn, g_vstd, x0, P0, q, rows, axle, lever, cfg, smooth,
     )  # fmt: skip
     N, nx = xs.shape
     if not smooth or N < 2:
-        return xs, var, cov_vxvy, nis, counts
+        return xs, var, var_last, cov_vxvy, nis, counts
     Ps_next = np.zeros((nx, nx))
     unpack_upper_nb(Ps[N - 1], Ps_next)
     bounds = [(max(k1 - SMOOTHER_CHUNK, 0), k1) for k1 in range(N - 1, 0, -SMOOTHER_CHUNK)]
@@ -411,7 +438,7 @@ def run_nodes(
             if i + 1 < len(bounds):
                 pending = pool.submit(gains, bounds[i + 1])
             smoother_recursion(k0, k1, xs, Ps, XN, PN, B, Ps_next, var, cov_vxvy)
-    return xs, var, cov_vxvy, nis, counts
+    return xs, var, var_last, cov_vxvy, nis, counts
 
 
 @numba.njit(cache=True)
