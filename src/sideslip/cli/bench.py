@@ -27,6 +27,9 @@ def bench_cmd(
     memory: Annotated[
         bool, typer.Option("--memory/--no-memory", help="Measure each method's peak memory (a child each).")
     ] = True,
+    repeat: Annotated[
+        int, typer.Option("--repeat", min=1, help="Runs per method; the fastest is reported.")
+    ] = 3,
 ) -> None:
     """Time every method on a simulated drive: samples/s, peak memory, peer-library ratio."""
     from sideslip.bench import run_bench
@@ -37,4 +40,6 @@ def bench_cmd(
     for name in method or []:
         if name not in registry:
             raise InputError("--method", f"unknown method '{name}': expected one of {', '.join(registry)}")
-    run_bench(hours=hours, methods=method, console=console, memory=memory, out_dir=out, cache=cache)
+    run_bench(
+        hours=hours, methods=method, console=console, memory=memory, out_dir=out, cache=cache, repeat=repeat
+    )
