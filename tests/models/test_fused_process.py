@@ -31,12 +31,13 @@ def _state(nx: int, rng: np.random.Generator) -> np.ndarray:
 
 
 @pytest.mark.parametrize("nx", [NX_CORE, NX_CORE + NX_GNSS_CAL])
-def test_jacobian_matches_central_differences(nx):
+@pytest.mark.parametrize("road_roll", [None, 0.05])
+def test_jacobian_matches_central_differences(nx, road_roll):
     """navlie-style check: every entry of F against (f(x + h e_j) - f(x - h e_j)) / 2h; the
     model is smooth away from the attitude clamp, so h = 1e-6 agrees to 1e-6 absolute."""
     rng = np.random.default_rng(3)
     x = _state(nx, rng)
-    u = np.array([0.2, 0.05, -0.03, 0.5, 3.0, 2.9])
+    u = np.array([0.2, 0.05, -0.03, 0.5, 3.0, 2.9] + ([] if road_roll is None else [road_roll]))
     dt = 0.05
     _, F = process(x, u, dt, 0.01, 60.0)
     num = np.zeros((nx, nx))
@@ -72,3 +73,21 @@ def test_steady_turn_step_follows_the_circle():
     u2 = u.copy()
     u2[0] = 0.21
     assert process(x, u2, dt, 0.0, 60.0)[0][IPSI] == pytest.approx(0.2 * dt)
+
+
+def test_road_bank_follows_the_roll_input_and_the_body_rate_turns_the_velocity():
+    """The bank-rate input (the roll gyro less the suspension's roll rate) moves c_y by
+    g cos(bank) rate dt; on a bank the body velocity turns with the gyro's own z rate (w_z,
+    here 0.2 rad/s), not the heading rate r = w_z / cos(bank): steady v_y when a_y - c_y
+    equals w_z v_x."""
+    x = np.zeros(NX_CORE)
+    x[IVX] = 20.0
+    x[ICY] = 9.80665 * math.sin(math.radians(20.0))
+    bank_rate = 0.1
+    u = np.array([0.2, 0.0, 0.0, 0.0, x[ICY] + 0.2 * 20.0, 0.0, bank_rate])
+    dt = 0.01
+    xn, _ = process(x, u, dt, 0.0, 60.0)
+    assert xn[ICY] - x[ICY] == pytest.approx(9.80665 * math.cos(math.radians(20.0)) * bank_rate * dt, rel=1e-9)
+    assert xn[IVY] == pytest.approx(0.0, abs=1e-12)
+    # without the input (a drive without wx) c_y is a random walk: unchanged by the step
+    assert process(x, u[:6], dt, 0.0, 60.0)[0][ICY] == x[ICY]

@@ -84,6 +84,12 @@ class FusedSettings:
     adapt_max: float = 400.0  # largest variance factor of the adaptive axle noise
     axle_min_speed: float = 3.0  # m/s: below this the slip angles are ill-defined
     front_axle: bool = False  # use the steering angle (front-axle relation) when present
+    # the road bank changes as the body rolls: the roll gyro (less the suspension's roll
+    # rate) drives c_y when the drive has wx, instead of c_y's random walk alone
+    roll_gyro_bank: bool = True
+    # without GNSS the smoother's axle forces are low-passed zero-phase and split with the
+    # yaw acceleration (the transients are then the stiffness's only teacher; fused.fuse)
+    tyres_only_transients: bool = True
     yaw_acceleration: bool = False  # split the axle forces with the yaw acceleration too
     identify_gnss_calibration: bool = False  # latency and lever arm as states (positions only)
     health_window_s: float = 2.0  # s: window of the consistency test
