@@ -470,7 +470,7 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     if rebuild:
         wz, wy = _hold(drive, "wz"), _hold(drive, "wy")
         ay = _hold(drive, "ay")
-        fy_lp = _low_pass(t, ay * (1.0 - G * k_phi), tau_f)
+        fy_lp = lp(t, ay * (1.0 - G * k_phi), tau_f)  # as above
         if smooth:
             del ay
         else:
