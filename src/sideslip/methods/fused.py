@@ -414,10 +414,10 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
             P0[ISW, ISW] = 1e-8
             q[ISW] = 0.0
     lever = np.array(vehicle.gnss_xyz, dtype=float)
-    every_row = idx.size == n  # the causal filter: nodes are the rows (no copies)
-    node_inputs = tuple(
-        a if every_row else a[idx] for a in (f_front, f_rear, delta, mu_floor, steady, force_var)
-    )
+    if idx.size == n:  # the causal filter: its nodes are the rows (no copies)
+        node_inputs = (f_front, f_rear, delta, mu_floor, steady, force_var)
+    else:
+        node_inputs = (f_front[idx], f_rear[idx], delta[idx], mu_floor[idx], steady[idx], force_var[idx])
     # the per-row node inputs are no longer needed: free them before the filter runs
     del f_front, f_rear, delta, mu_floor, steady, force_var, jerk, r_dot, r_dot_lp, vw, raw, wx
     if smooth or rebuild:  # the smoother's outputs interpolate the nodes: no row ax, ay

@@ -333,10 +333,6 @@ class RollEstimate:
 
     roll: FloatArray
     bank: FloatArray
-    phi_ss: FloatArray
-    phi_ay: FloatArray
-    phi_r: FloatArray
-    phi_sus: FloatArray
     lam: BoolArray
     f: BoolArray
     g: BoolArray
@@ -408,25 +404,34 @@ def estimate_roll_index(inp: Inputs, vehicle: Vehicle, identify_gradient: bool =
     t = inp.t
     dt = float(np.median(np.diff(t))) if t.size >= 8 else None  # for every low-pass below
     moving = np.abs(inp.vx) >= V_MIN
-    s_ss, s_ay, s_r, gains, ay_f, _ = _channels(inp, vehicle, roll_cutoff_hz, dt)
+    # (each per-row intermediate is freed once used: a day at 100 Hz is 69 MB a channel)
+    s_ss, _, _, gains, ay_f, _ = _channels(inp, vehicle, roll_cutoff_hz, dt)
     phi_ss = np.arcsin(s_ss)
+    del s_ss
     # flags on more strongly smoothed channels
     fs_ss, fs_ay, fs_r, _, _, d_f = _channels(inp, vehicle, FLAG_CUTOFF_HZ, dt, gains)
     f_ss, f_ay, f_r = np.arcsin(fs_ss), np.arcsin(fs_ay), np.arcsin(fs_r)
+    del fs_ss, fs_ay, fs_r
     d_ss, d_ay, d_r = ddt(f_ss, t), ddt(f_ay, t), ddt(f_r, t)
+    del f_ss
     shape = ddt(np.abs(d_ay - d_ss) - np.abs(d_r - d_ss), t)
+    del d_ss, d_ay, d_r
     shape = lowpass(shape, t, FLAG_CUTOFF_HZ, dt)
     f = held_for(np.abs(shape) < F_TH, t, T_TH1)
+    del shape
     # the yaw channel resolves a bank only beyond its own error (docstring)
     resolves = yaw_bank_resolution(vehicle, np.abs(inp.vx), d_f) < np.abs(f_ay)
     g = held_for((f_ay * f_r > 0.0) | ~resolves, t, T_TH2)
+    del f_ay, f_r, resolves
     r_f = lowpass(inp.r, t, FLAG_CUTOFF_HZ, dt)
     h = held_for(
         (np.abs(d_f) < G_TH1) & (np.abs(ddt(d_f, t)) < G_TH2) & (np.abs(r_f) < G_TH3),
         t, T_STRAIGHT,
     )
     d_sw = vehicle.steering_ratio * d_f
+    del d_f
     k = ~seen_within(np.abs(d_sw * r_f) > K_TH, t, T_TH4)
+    del d_sw, r_f
     lam = (f & k & (g | h)) | ~moving
     grad = identify_roll_gradient(t, ay_f, phi_ss, f & k & moving, moving).validated(
         vehicle.static_roll_gain)
@@ -441,10 +446,8 @@ def estimate_roll_index(inp: Inputs, vehicle: Vehicle, identify_gradient: bool =
     np.maximum.accumulate(idx, out=idx)
     anchor = np.maximum(idx, 0)
     roll = np.where(lam, phi_ss, phi_ss[anchor] + phi_sus - phi_sus[anchor])
-    return RollEstimate(
-        roll=roll, bank=roll - phi_sus, phi_ss=phi_ss, phi_ay=np.arcsin(s_ay),
-        phi_r=np.arcsin(s_r), phi_sus=phi_sus, lam=lam, f=f, g=g, h=h, k=k, params=params,
-    )
+    del phi_ss, idx, anchor
+    return RollEstimate(roll=roll, bank=roll - phi_sus, lam=lam, f=f, g=g, h=h, k=k, params=params)
 
 
 def estimate_roll_dfc(inp: Inputs, vehicle: Vehicle, roll_cutoff_hz: float = ROLL_CUTOFF_HZ
