@@ -411,6 +411,7 @@ def _estimate(
     ay = x[:, V] * x[:, R]
     slip = slip_gain * np.maximum(np.abs(ay), np.sqrt(causal_mean(t, ay**2, SLIP_WINDOW_S)))
     beta_std = np.sqrt(np.maximum(res.beta_var, 0.0) * inflation + slip**2 + bank_beta**2)
+    del cue, sin_bank, bank_beta, ay, slip, inflation  # memory: per-row terms used above only
     series = {
         "e": x[:, E],
         "n": x[:, N],
