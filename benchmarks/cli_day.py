@@ -7,7 +7,10 @@ in a fresh process, load and write included, on the bench's 24 h, 100 Hz drive (
 would be; 1.4 GB on disk, cached beside the bench drives).  The peak is the child's
 ``VmHWM``; issue 17's bound is 4 GB.
 
-    nice .venv/bin/python benchmarks/cli_day.py [--hours 24] [--method M ...] [--out FILE.md]
+    nice .venv/bin/python benchmarks/cli_day.py [--hours 24] [--method M ...] [--out FILE.md] [--reuse]
+
+Every run is kept in ``FILE.json`` beside the table; ``--reuse`` keeps the runs recorded there
+for methods not named again (the table lists them all, each with the time it was measured).
 """
 
 from __future__ import annotations
@@ -62,7 +65,8 @@ def run(path: Path, method: str, vehicle: str) -> dict[str, float | str]:
             said = [x for x in proc.stderr.splitlines() if x.strip() and not x.startswith("VMHWM_KB")]
             return {"method": method, "error": (said or ["no output"])[-1][:200]}
         return {"method": method, "peak_gb": kb[-1] * 1024 / 1e9, "wall_s": wall,
-                "out_mb": out.stat().st_size / 1e6}  # fmt: skip
+                "out_mb": out.stat().st_size / 1e6,
+                "measured": f"{dt.datetime.now(dt.UTC):%Y-%m-%d %H:%M}"}  # fmt: skip
 
 
 def markdown(rows: list[dict[str, float | str]], hours: float, path: Path) -> str:
@@ -75,15 +79,18 @@ def markdown(rows: list[dict[str, float | str]], hours: float, path: Path) -> st
         "columns) and writing the estimate; peak = the process's `VmHWM` (GB = 1e9 bytes). "
         "The drive is read compact (over 2,000,000 rows). Wall time on the shared 2-core machine.",
         "",
-        "| method | peak GB | wall s | estimate file MB | within 4 GB |",
-        "|---|---:|---:|---:|---|",
+        "| method | peak GB | wall s | estimate file MB | within 4 GB | measured (UTC) |",
+        "|---|---:|---:|---:|---|---|",
     ]
     for r in rows:
         if "error" in r:
             lines.append(f"| {r['method']} | - | - | - | failed: {r['error']} |")
             continue
         ok = "yes" if float(r["peak_gb"]) <= BOUND_GB else "**no**"
-        lines.append(f"| {r['method']} | {r['peak_gb']:.2f} | {r['wall_s']:.0f} | {r['out_mb']:.0f} | {ok} |")
+        lines.append(
+            f"| {r['method']} | {r['peak_gb']:.2f} | {r['wall_s']:.0f} | {r['out_mb']:.0f} | {ok} "
+            f"| {r.get('measured', '-')} |"
+        )
     return "\n".join(lines) + "\n"
 
 
@@ -93,14 +100,18 @@ def main() -> None:
     ap.add_argument("--method", action="append", required=True)
     ap.add_argument("--vehicle", default="midsize_sedan")
     ap.add_argument("--out", type=Path, default=RESULTS / "cli_day.md")
+    ap.add_argument("--reuse", action="store_true", help="keep the recorded runs of other methods")
     args = ap.parse_args()
     path = day_drive(args.hours)
-    rows = []
+    store = args.out.with_suffix(".json")
+    kept = json.loads(store.read_text()) if args.reuse and store.exists() else {}
+    runs: dict[str, dict[str, float | str]] = {m: r for m, r in kept.items() if m not in args.method}
     for method in args.method:
-        rows.append(run(path, method, args.vehicle))
-        print(json.dumps(rows[-1]), flush=True)
-        args.out.write_text(markdown(rows, args.hours, path))
-    print(f"wrote {args.out}")
+        runs[method] = run(path, method, args.vehicle)
+        print(json.dumps(runs[method]), flush=True)
+        store.write_text(json.dumps(runs, indent=1))
+        args.out.write_text(markdown([runs[m] for m in sorted(runs)], args.hours, path))
+    print(f"wrote {args.out} and {store}")
 
 
 if __name__ == "__main__":

@@ -35,10 +35,15 @@ FloatArray = NDArray[np.float64]
 
 
 def _cumtrapz(t: FloatArray, y: FloatArray) -> FloatArray:
-    """Cumulative trapezoidal integral of y over t, starting at 0."""
-    out = np.zeros_like(y, dtype=float)
+    """Cumulative trapezoidal integral of y over t, starting at 0 (the steps computed in place:
+    one temporary the length of the drive besides the time steps)."""
+    y = np.asarray(y, dtype=float)
+    out = np.zeros_like(y)
     if y.size > 1:
-        out[1:] = np.cumsum(0.5 * (y[1:] + y[:-1]) * np.diff(t))
+        step = y[1:] + y[:-1]
+        step *= 0.5
+        step *= np.diff(t)
+        np.cumsum(step, out=out[1:])
     return out
 
 
