@@ -414,20 +414,23 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
             P0[ISW, ISW] = 1e-8
             q[ISW] = 0.0
     lever = np.array(vehicle.gnss_xyz, dtype=float)
-    every_row = idx.size == n  # the causal filter: nodes are the rows (no copies)
-    node_inputs = tuple(
-        a if every_row else a[idx] for a in (f_front, f_rear, delta, mu_floor, steady, force_var)
-    )
+    if idx.size == n:  # the causal filter: its nodes are the rows (no copies)
+        node_inputs = (f_front, f_rear, delta, mu_floor, steady, force_var)
+    else:
+        node_inputs = (f_front[idx], f_rear[idx], delta[idx], mu_floor[idx], steady[idx], force_var[idx])
     # the per-row node inputs are no longer needed: free them before the filter runs
     del f_front, f_rear, delta, mu_floor, steady, force_var, jerk, r_dot, r_dot_lp, vw, raw, wx
     if smooth or rebuild:  # the smoother's outputs interpolate the nodes: no row ax, ay
         del ax, ay
     if rebuild:
         del wz, wy, fy_lp
+    cfg = _config(nz, k_phi, calibrate, has_vel)
+    # the axle noise identified from the innovations may fall below its prior only where GNSS
+    # gives v_y independently of the tyres (FusedSettings.adapt_min)
+    cfg[eng.C_ADAPT_MIN] = nz.adapt_min if (has_pos or has_vel) else 1.0
     xs, var, var_last, cov_vxvy, nis, counts = eng.run_nodes(
         tn, U, vw_n, *node_inputs, g_node, g_age, gn["gnss_e"], gn["gnss_n"], gn["pstd"],
-        gn["gnss_ve"], gn["gnss_vn"], gn["vstd"], x0, P0, q, f_rows(nx), geom, lever,
-        _config(nz, k_phi, calibrate, has_vel), smooth,
+        gn["gnss_ve"], gn["gnss_vn"], gn["vstd"], x0, P0, q, f_rows(nx), geom, lever, cfg, smooth,
     )  # fmt: skip
     del U, gn, node_inputs
     # consistency between cues: windowed NIS of the axle and GNSS innovations
