@@ -424,10 +424,13 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
         del ax, ay
     if rebuild:
         del wz, wy, fy_lp
+    cfg = _config(nz, k_phi, calibrate, has_vel)
+    # the axle noise identified from the innovations may fall below its prior only where GNSS
+    # gives v_y independently of the tyres (FusedSettings.adapt_min)
+    cfg[eng.C_ADAPT_MIN] = nz.adapt_min if (has_pos or has_vel) else 1.0
     xs, var, var_last, cov_vxvy, nis, counts = eng.run_nodes(
         tn, U, vw_n, *node_inputs, g_node, g_age, gn["gnss_e"], gn["gnss_n"], gn["pstd"],
-        gn["gnss_ve"], gn["gnss_vn"], gn["vstd"], x0, P0, q, f_rows(nx), geom, lever,
-        _config(nz, k_phi, calibrate, has_vel), smooth,
+        gn["gnss_ve"], gn["gnss_vn"], gn["vstd"], x0, P0, q, f_rows(nx), geom, lever, cfg, smooth,
     )  # fmt: skip
     del U, gn, node_inputs
     # consistency between cues: windowed NIS of the axle and GNSS innovations

@@ -90,7 +90,8 @@ from sideslip.vehicle import G
     C_GM_SIGMA,
     C_WHEEL_SLIP_STIFFNESS,
 ) = range(24)
-N_CFG = 24
+C_ADAPT_MIN = 24  # the adaptive axle noise's smallest factor
+N_CFG = 25
 
 # the states whose variance is kept at every node (the outputs' sigmas, the beta_std terms and
 # mu's params); ``VAR_COLUMN[state]`` is its column in the node variances.  The full diagonal
@@ -130,10 +131,10 @@ def _robust(x, P, innov, h, r, inflate_nis, work):
 
 @numba.njit(cache=True)
 def _adapt(infl, nis, dt, cfg):
-    """Adaptive variance factor of an axle relation: grows while its NIS exceeds 1, decays
-    back to 1 otherwise (time constant C_ADAPT_TAU)."""
+    """Adaptive variance factor of an axle relation: grows while its NIS exceeds 1, shrinks
+    while it is below 1 (time constant C_ADAPT_TAU), within [C_ADAPT_MIN, C_ADAPT_MAX]."""
     a = min(1.0, dt / cfg[C_ADAPT_TAU])
-    return min(max(infl * math.exp(a * (min(nis, 25.0) - 1.0)), 1.0), cfg[C_ADAPT_MAX])
+    return min(max(infl * math.exp(a * (min(nis, 25.0) - 1.0)), cfg[C_ADAPT_MIN]), cfg[C_ADAPT_MAX])
 
 
 @numba.njit(cache=True)

@@ -82,6 +82,17 @@ class FusedSettings:
     mu_floor_sigma: float = 0.05  # 1-sigma of the constraint mu >= |a| / g where violated
     adapt_tau_s: float = 1.0  # s: adaptive axle-noise time constant
     adapt_max: float = 400.0  # largest variance factor of the adaptive axle noise
+    # smallest variance factor, with GNSS (without GNSS 1: the tyres are then the only v_y
+    # cue and their innovations have no independent reference).  With GNSS Doppler or
+    # positions the axle relations' innovations are checked against an independent v_y, and
+    # on gentle drives their NIS averages 0.04-0.05 (urban_highway, urban_course, demo): the
+    # prior sigma force_sigma + force_rel |f| is ~4.5x too wide there, so the Doppler noise
+    # (not the tyres) sets beta.  The drive's NIS identifies the relation's noise (the
+    # adaptive factor follows it down as well as up), bounded so that the floor stays at
+    # force_sigma / 2 = 0.075 m/s^2, above a MEMS accelerometer's turn-on offset (5 mg class,
+    # which the relation cannot tell from tyre force).  Measured (beta RMSE deg, factor 1 ->
+    # 0.25): urban_highway 0.035 -> 0.025, demo 0.022 -> 0.012, cr_circle 0.088 -> 0.026
+    adapt_min: float = 0.25
     axle_min_speed: float = 3.0  # m/s: below this the slip angles are ill-defined
     front_axle: bool = False  # use the steering angle (front-axle relation) when present
     # the road bank changes as the body rolls: the roll gyro (less the suspension's roll

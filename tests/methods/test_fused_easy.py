@@ -1,0 +1,66 @@
+"""fused on gentle drives with GNSS Doppler (issue 15 pt 4): the axle relations' noise is
+identified from their innovations (the adaptive factor follows the NIS down as well as up,
+bounded at FusedSettings.adapt_min), so the tyres, not the Doppler noise, set beta where the
+brush model fits.  Before, fused sat at an error floor of 0.02-0.04 deg (demo 0.022, urban_highway
+0.035) with axle NIS 0.04-0.05 (sigma ~4.5x too wide)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from sideslip.drive import drive_from_columns
+from sideslip.evaluate import SPEED_GATE, metrics
+from sideslip.frames import wrap_angle
+from sideslip.methods.registry import run_method
+from sideslip.vehicle import load_vehicle
+from tests.conftest import sim_drive
+
+
+def _run(name: str, scenario: str, **settings: float):
+    drive = sim_drive(scenario)
+    est = run_method(name, drive, load_vehicle(drive.meta["vehicle"]), settings or None)
+    return drive, est
+
+
+def test_fused_is_within_ten_percent_of_doppler_slip_on_the_demo_drive():
+    # issue 15's target (best or within 10 % of the best); measured 0.0124 against doppler_slip's
+    # 0.0125 (before: 0.0218, 75 % behind)
+    drive, est = _run("fused", "demo")
+    _, ref = _run("doppler_slip", "demo")
+    ours = metrics(drive, est.series)["beta_rmse_deg"]
+    best = metrics(drive, ref.series)["beta_rmse_deg"]
+    assert ours <= 1.1 * best
+
+
+@pytest.mark.parametrize(("scenario", "bound"), [("urban_highway", 0.029), ("demo", 0.016)])
+def test_fused_error_floor_on_gentle_doppler_drives(scenario, bound):
+    # measured 0.0245 / 0.0124 deg (before 0.0355 / 0.0218): the bound sits at 40 % of the gain
+    # from the new value, so seed-level changes elsewhere do not trip it but the old floor does
+    drive, est = _run("fused", scenario)
+    assert metrics(drive, est.series)["beta_rmse_deg"] <= bound
+    # and the sigma stays honest (compare_methods' 2-sigma share, 0.95 for a calibrated Gaussian)
+    gate = drive["ref_vx"] > SPEED_GATE
+    err = np.abs(wrap_angle(est["beta"] - drive["ref_beta"]))[gate]
+    assert np.mean(err < 2 * est["beta_std"][gate]) >= 0.95
+
+
+def test_the_old_floor_is_the_undeflated_axle_noise():
+    # with the factor held at >= 1 (the old behaviour) the floor comes back: the gain is the
+    # identified axle noise, nothing else
+    drive, old = _run("fused", "demo", adapt_min=1.0)
+    _, new = _run("fused", "demo")
+    e_old = metrics(drive, old.series)["beta_rmse_deg"]
+    e_new = metrics(drive, new.series)["beta_rmse_deg"]
+    assert e_new < 0.75 * e_old
+
+
+def test_without_gnss_the_axle_noise_is_not_deflated():
+    # without GNSS the tyres are the only v_y cue: adapt_min has no effect
+    full = sim_drive("step_steer")
+    cols = {"t": full.t, **{k: v for k, v in full.data.items() if not k.startswith("gnss_")}}
+    drive = drive_from_columns(cols, dict(full.meta))
+    vehicle = load_vehicle(drive.meta["vehicle"])
+    a = run_method("fused", drive, vehicle, {"adapt_min": 0.25})
+    b = run_method("fused", drive, vehicle, {"adapt_min": 1.0})
+    assert np.array_equal(a["beta"], b["beta"])
