@@ -9,9 +9,7 @@ import numpy as np
 import pytest
 from scipy.integrate import cumulative_trapezoid
 
-pytest.importorskip(
-    "vehiclemodels", reason="needs the optional commonroad extra (commonroad-vehicle-models)"
-)
+pytest.importorskip("vehiclemodels", reason="needs the optional commonroad extra (commonroad-vehicle-models)")
 
 from sideslip.errors import InputError
 from sideslip.simulate import SensorConfig, simulate
@@ -47,8 +45,9 @@ def test_left_turn_is_positive_yaw_rate_and_rolls_right_side_down() -> None:
 
 
 def test_braking_pitches_nose_down_positive() -> None:
-    truth = cr.commonroad_truth(0.0, accel=lambda t: -4.0 if t > 1.0 else 0.0,
-                                duration_s=3.0, initial_speed=20.0)
+    truth = cr.commonroad_truth(
+        0.0, accel=lambda t: -4.0 if t > 1.0 else 0.0, duration_s=3.0, initial_speed=20.0
+    )
     assert truth.ax[-1] < -3.0
     assert truth.pitch[-1] > 0.005  # ISO: nose down positive
     # Straight braking: no turning.  CommonRoad's multi-body model has a small self-sustained
@@ -74,10 +73,8 @@ def test_truth_is_kinematically_consistent() -> None:
     # Trapezoid on kinked signals over 10 s: within 2e-3 m/s.
     vy = truth.vy[0] + cumulative_trapezoid(truth.ay - truth.r * truth.vx, t, initial=0)
     np.testing.assert_allclose(vy, truth.vy, atol=2e-3)
-    np.testing.assert_allclose(ve[0] + cumulative_trapezoid(truth.acc_enu[:, 0], t, initial=0),
-                               ve, atol=2e-3)
-    np.testing.assert_allclose(vn[0] + cumulative_trapezoid(truth.acc_enu[:, 1], t, initial=0),
-                               vn, atol=2e-3)
+    np.testing.assert_allclose(ve[0] + cumulative_trapezoid(truth.acc_enu[:, 0], t, initial=0), ve, atol=2e-3)
+    np.testing.assert_allclose(vn[0] + cumulative_trapezoid(truth.acc_enu[:, 1], t, initial=0), vn, atol=2e-3)
     # Body yaw rate = r cos(roll) cos(pitch) - pitch rate sin(roll) (Euler rates).
     assert np.max(np.abs(truth.omega_body[:, 2] - truth.r)) < 1e-3
 
@@ -98,8 +95,10 @@ def test_cornering_stiffness_is_per_axle_tyre_slope_at_static_load() -> None:
     p = cr.parameters("vw_vanagon")
     vehicle = load_vehicle("commonroad_vw_vanagon")
     alpha = 1e-4
-    for axle_load, stiffness in ((p.m * cr.CR_G * p.b / (p.a + p.b), vehicle.cf),
-                                 (p.m * cr.CR_G * p.a / (p.a + p.b), vehicle.cr)):
+    for axle_load, stiffness in (
+        (p.m * cr.CR_G * p.b / (p.a + p.b), vehicle.cf),
+        (p.m * cr.CR_G * p.a / (p.a + p.b), vehicle.cr),
+    ):
         # Two tyres per axle, each at half the axle load; CommonRoad's F_y is -C alpha.
         slope = -2 * formula_lateral(alpha, 0.0, axle_load / 2, p.tire)[0] / alpha
         assert stiffness == pytest.approx(slope, rel=1e-3)
@@ -128,8 +127,19 @@ def test_cr_scenarios_are_reachable_from_simulate() -> None:
     assert drive.meta["scenario"] == "cr_step_steer"
     assert drive.meta["vehicle"] == "commonroad_vw_vanagon"
     load_vehicle(drive.meta["vehicle"])
-    for name in ("ax", "ay", "wz", "v_rl", "v_can", "steer", "gnss_e", "gnss_ve", "ref_beta",
-                 "ref_roll", "ref_ay"):
+    for name in (
+        "ax",
+        "ay",
+        "wz",
+        "v_rl",
+        "v_can",
+        "steer",
+        "gnss_e",
+        "gnss_ve",
+        "ref_beta",
+        "ref_roll",
+        "ref_ay",
+    ):
         assert name in drive, name
     # Accelerometer (IMU at the CG) minus the reference: gravity through roll + drawn offset.
     ts = drive.meta["truth_sensor"]

@@ -3,9 +3,7 @@
 from __future__ import annotations
 
 import functools
-import hashlib
 import math
-from dataclasses import fields, is_dataclass
 from typing import Any
 
 import numpy as np
@@ -22,6 +20,7 @@ from sideslip.simulate.scenarios import (
 from sideslip.simulate.truth import Truth
 from sideslip.simulate.vehicle_model import Diagnostics
 from sideslip.vehicle import load_vehicle, preset_names
+from tests.simulate.fingerprints import array_fingerprint, assert_matches, fingerprint, load
 
 SENSOR_KEYS = {"gyro_scale_factor", "gnss_rate_hz", "gnss_outages", "gnss_multipath_prob"}
 KMH = 3.6
@@ -230,56 +229,29 @@ def test_demo_headline() -> None:
     assert np.degrees(truth.bank.max()) == pytest.approx(4.0, abs=0.5)
 
 
-def _feed(h: Any, obj: Any) -> None:
-    """Hash every field of a dataclass: arrays by their float64 bytes, nested dataclasses field by
-    field, other values (mappings, numbers, strings) by repr; callables (the builder) are skipped."""
-    for f in fields(obj):
-        value = getattr(obj, f.name)
-        h.update(f.name.encode())
-        if isinstance(value, np.ndarray):
-            h.update(np.ascontiguousarray(value, dtype=np.float64).tobytes())
-        elif is_dataclass(value):
-            _feed(h, value)
-        elif not callable(value):
-            h.update(repr(value).encode())
-
-
-# sha256 of each scenario's definition (duration, sensor overrides, options, headline), its whole
-# road and driver plan for seed 3, and the truth, model diagnostics and drive columns of its first
-# 3 s, recorded on the tree before scenarios.py was split into the registry and its builder
-# modules (scenarios_tracks, scenarios_routes): the split must leave every drive bit-identical.
-_SPLIT_DIGESTS = {
-    "step_steer": "0150c4e9db521f53af535c8124d8ba5468dfc3242f995518c5815d3e83ea9f5f",
-    "slalom_low_mu": "a7fabcdd2a13d1ba0b4308af6771260545f64a9b42cb1be3447e18097d19136e",
-    "banked_turn": "0ab1d65ac9d78e4a6d2460d2b7e20c278407cc28c4f35d3217ceb245e411da9f",
-    "dlc_bank": "dcbcfed959312e90f02efed4f291588e9337ad20d97065923d4094cb27fbf751",
-    "two_turns_gyro_sf": "814fe15dc04207ba7a4ccbc03ab6311060a0f822caad3e5452920d3c750f3283",
-    "banked_track_turn": "1c3450647659b9b29ff03ff19eccf18244cef6c978130bd3eb26a4fa2d6573d0",
-    "urban_course": "05856a7bc65788c1c42ee788ec2d449aa54011bfa841e1c76ca393a5d3039cc6",
-    "urban_highway": "682d12fae3aa5b31542140b8b7b113b2f5af837e96337b414635365d4346b86b",
-    "race_lap": "03b3933f9c2547a83887ea7bf15f00f39fa48a9a6a156f7866130eefd80c6446",
-    "suburban_outages": "cbe033cdb3eb5f1969a2a25f7568814fb4173fe2030a8d181bf9e892eaf3bee9",
-    "demo": "d605635df117c38cd014c1e3af2409b70a14118752860840f9d1a615a9666bff",
-    "endurance": "f94a186ca6ff1e1cd2c1820d3a345700ab26253d9140c8964e2c105e5b4d5f83",
-}
-
-
-@pytest.mark.parametrize("name", sorted(_SPLIT_DIGESTS))
-def test_scenario_is_bit_identical_to_the_recording_before_the_module_split(name: str) -> None:
-    h = hashlib.sha256()
-    _feed(h, SCENARIOS[name])
+def split_fingerprint(name: str) -> dict[str, Any]:
+    """Fingerprint (tests.simulate.fingerprints) of a scenario's definition (duration, sensor
+    overrides, options, headline), its whole road and driver plan for seed 3, and the truth,
+    model diagnostics and drive columns of its first 3 s."""
+    out = fingerprint(SCENARIOS[name], "scenario.")
     road, plan, _rng = build_scenario(name, seed=3)
-    _feed(h, road)
-    _feed(h, plan)
+    fingerprint(road, "road.", out)
+    fingerprint(plan, "plan.", out)
     truth, diag = run_scenario_full(name, seed=3, duration_s=3.0)
-    _feed(h, truth)
-    _feed(h, diag)
+    fingerprint(truth, "truth.", out)
+    fingerprint(diag, "diag.", out)
     drive = simulate(name, seed=3, duration_s=3.0)
     for column in sorted(drive.data):
-        h.update(column.encode())
-        h.update(np.ascontiguousarray(drive.data[column], dtype=np.float64).tobytes())
-    assert h.hexdigest() == _SPLIT_DIGESTS[name]
+        out["drive." + column] = array_fingerprint(drive.data[column])
+    return out
 
 
-def test_every_scenario_has_a_recorded_digest() -> None:
-    assert set(_SPLIT_DIGESTS) == set(SCENARIOS)
+# recorded from the tree whose drives the sha256 digests of the module split (72d2f34) and of
+# the named parameters had checked bit-identical; see tests/simulate/fingerprints.py
+@pytest.mark.parametrize("name", sorted(SCENARIOS))
+def test_scenario_matches_the_recording_before_the_module_split(name: str) -> None:
+    assert_matches(split_fingerprint(name), load()[f"split/{name}"])
+
+
+def test_every_scenario_has_a_recorded_fingerprint() -> None:
+    assert {k.split("/", 1)[1] for k in load() if k.startswith("split/")} == set(SCENARIOS)

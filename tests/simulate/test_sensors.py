@@ -22,8 +22,7 @@ from sideslip.simulate.sensors import body_to_enu, sample_rows, sensor_columns
 from sideslip.simulate.truth import Truth
 from sideslip.vehicle import G, load_vehicle
 
-VEHICLE = load_vehicle("seed003_sedan").with_changes(imu_xyz=(0.0, 0.0, 0.0),
-                                                     gnss_xyz=(0.0, 0.0, 0.0))
+VEHICLE = load_vehicle("seed003_sedan").with_changes(imu_xyz=(0.0, 0.0, 0.0), gnss_xyz=(0.0, 0.0, 0.0))
 TRACK = 1.55
 WHEELBASE = 2.776
 
@@ -59,11 +58,13 @@ def circle_truth(
     vx, vy = speed * math.cos(beta) * one, speed * math.sin(beta) * one
     acc = np.column_stack([-speed * r * np.sin(nu), speed * r * np.cos(nu), 0 * t])
     roll = bank + roll_sus
-    omega = np.column_stack([
-        -r * math.sin(pitch) * one,
-        r * math.sin(roll) * math.cos(pitch) * one,
-        r * math.cos(roll) * math.cos(pitch) * one,
-    ])
+    omega = np.column_stack(
+        [
+            -r * math.sin(pitch) * one,
+            r * math.sin(roll) * math.cos(pitch) * one,
+            r * math.cos(roll) * math.cos(pitch) * one,
+        ]
+    )
     wheels = np.column_stack([vx - r * TRACK / 2, vx + r * TRACK / 2] * 2)
     return Truth(
         t=t, e=e, n=n, u=0 * t, yaw=yaw, pitch=pitch * one, roll=roll * one,
@@ -80,8 +81,10 @@ def straight_truth(speed: float = 20.0, duration_s: float = 10.0, dt: float = 0.
 
 def standstill_truth(bank: float = 0.0, duration_s: float = 10.0, dt: float = 0.01) -> Truth:
     """Parked car on a road banked by ``bank`` (no suspension roll)."""
-    return replace(circle_truth(speed=0.0, radius=math.inf, bank=bank, duration_s=duration_s,
-                                dt=dt), steer=np.zeros(round(duration_s / dt) + 1))
+    return replace(
+        circle_truth(speed=0.0, radius=math.inf, bank=bank, duration_s=duration_s, dt=dt),
+        steer=np.zeros(round(duration_s / dt) + 1),
+    )
 
 
 def make_drive(truth: Truth, config: SensorConfig, seed: int = 0, vehicle=VEHICLE) -> Drive:
@@ -124,8 +127,9 @@ def test_gnss_course_minus_reference_yaw_is_reference_beta() -> None:
     rows = finite_rows(drive, "gnss_ve")
     course = np.arctan2(drive["gnss_vn"][rows], drive["gnss_ve"][rows])
     # Noise off and the antenna at the CG: exact up to round-off.
-    np.testing.assert_allclose(wrap_angle(course - drive["ref_yaw"][rows]),
-                               drive["ref_beta"][rows], atol=1e-9)
+    np.testing.assert_allclose(
+        wrap_angle(course - drive["ref_yaw"][rows]), drive["ref_beta"][rows], atol=1e-9
+    )
 
 
 @pytest.mark.parametrize("pitch", [0.0, 0.03])
@@ -143,8 +147,7 @@ def test_lateral_specific_force_minus_reference_ay_is_gravity_plus_bias(pitch: f
     bound = (1 - math.cos(roll)) * np.abs(ay) + abs(math.sin(roll) * math.sin(theta)) * np.abs(ax)
     assert np.all(np.abs(residual) <= bound + 1e-9)
     exact = math.cos(roll) * ay + math.sin(roll) * math.sin(theta) * ax
-    np.testing.assert_allclose(drive["ay"] - bias_y,
-                               exact + G * math.sin(roll) * math.cos(theta), atol=1e-9)
+    np.testing.assert_allclose(drive["ay"] - bias_y, exact + G * math.sin(roll) * math.cos(theta), atol=1e-9)
 
 
 def test_positive_bank_at_standstill_raises_ay_by_g_sin_bank() -> None:
@@ -161,16 +164,14 @@ def test_body_to_enu_is_rot_z_rot_y_rot_x() -> None:
     yaw, pitch, roll = np.array([0.3, -2.0]), np.array([0.1, -0.05]), np.array([-0.2, 0.07])
     rot = body_to_enu(yaw, pitch, roll)
     for i in range(2):
-        np.testing.assert_allclose(rot[i], rot_z(yaw[i]) @ rot_y(pitch[i]) @ rot_x(roll[i]),
-                                   atol=1e-15)
+        np.testing.assert_allclose(rot[i], rot_z(yaw[i]) @ rot_y(pitch[i]) @ rot_x(roll[i]), atol=1e-15)
 
 
 def test_accelerometer_forward_of_cg_sees_centripetal_lever_arm_term() -> None:
     arm = 1.2
     truth = circle_truth(speed=15.0, radius=40.0)
     at_cg = make_drive(truth, SensorConfig.noiseless())
-    ahead = make_drive(truth, SensorConfig.noiseless(),
-                       vehicle=VEHICLE.with_changes(imu_xyz=(arm, 0.0, 0.0)))
+    ahead = make_drive(truth, SensorConfig.noiseless(), vehicle=VEHICLE.with_changes(imu_xyz=(arm, 0.0, 0.0)))
     r = 15.0 / 40.0
     # omega x (omega x l) = [-r^2 l, 0, 0] for omega = [0, 0, r]; d(omega)/dt = 0.
     np.testing.assert_allclose(ahead["ax"] - at_cg["ax"], -(r**2) * arm, atol=1e-9)
@@ -207,8 +208,9 @@ def test_misalignment_moves_gravity_into_ay_as_reported() -> None:
     roll_misalignment = ts["imu_misalignment"][0]
     # Sensor axes rolled by +e about x: gravity appears as +g sin(e) on y.
     np.testing.assert_allclose(drive["ay"], ts["ay_bias_level"], atol=1e-12)
-    assert ts["ay_bias_level"] == pytest.approx(G * math.sin(roll_misalignment)
-                                                * math.cos(ts["imu_misalignment"][1]), rel=1e-9)
+    assert ts["ay_bias_level"] == pytest.approx(
+        G * math.sin(roll_misalignment) * math.cos(ts["imu_misalignment"][1]), rel=1e-9
+    )
 
 
 # ------------------------------------------------------------------------------------------
@@ -220,8 +222,16 @@ def test_sensors_sample_at_their_rates_and_leave_nan_between() -> None:
               for name in ("wz", "ay", "v_fl", "v_can", "steer", "gnss_e", "gnss_ve",
                            "gnss_pos_std")}  # fmt: skip
     # 10 s + the sample at t = 0.
-    assert counts == {"wz": 1001, "ay": 1001, "v_fl": 501, "v_can": 201, "steer": 501,
-                      "gnss_e": 101, "gnss_ve": 101, "gnss_pos_std": 101}
+    assert counts == {
+        "wz": 1001,
+        "ay": 1001,
+        "v_fl": 501,
+        "v_can": 201,
+        "steer": 501,
+        "gnss_e": 101,
+        "gnss_ve": 101,
+        "gnss_pos_std": 101,
+    }
     np.testing.assert_array_equal(finite_rows(drive, "gnss_e"), np.arange(0, 1001, 10))
     np.testing.assert_array_equal(finite_rows(drive, "gnss_vn"), finite_rows(drive, "gnss_u"))
 
@@ -258,8 +268,7 @@ def test_multipath_epochs_are_rare_large_position_jumps() -> None:
     config = SensorConfig.noiseless(gnss_multipath_prob=prob)
     drive = make_drive(straight_truth(duration_s=3600.0, dt=0.1), config)
     rows = finite_rows(drive, "gnss_e")
-    err = np.hypot(drive["gnss_e"][rows] - drive["ref_e"][rows],
-                   drive["gnss_n"][rows] - drive["ref_n"][rows])
+    err = np.hypot(drive["gnss_e"][rows] - drive["ref_e"][rows], drive["gnss_n"][rows] - drive["ref_n"][rows])
     verr = np.hypot(drive["gnss_ve"][rows] - 20.0, drive["gnss_vn"][rows])
     hits = err > 1e-9
     reported = drive.meta["truth_sensor"]["gnss_multipath_epochs"]
@@ -287,8 +296,7 @@ def test_gnss_position_error_is_gauss_markov_with_configured_sigma_and_tau() -> 
 def test_gnss_antenna_lever_arm_moves_position_and_velocity() -> None:
     arm = np.array([0.5, 0.3, 1.2])
     truth = circle_truth(speed=15.0, radius=50.0, bank=0.05, roll_sus=0.03, pitch=0.02)
-    drive = make_drive(truth, SensorConfig.noiseless(),
-                       vehicle=VEHICLE.with_changes(gnss_xyz=tuple(arm)))
+    drive = make_drive(truth, SensorConfig.noiseless(), vehicle=VEHICLE.with_changes(gnss_xyz=tuple(arm)))
     for i in finite_rows(drive, "gnss_e")[::37]:
         rot = rot_z(truth.yaw[i]) @ rot_y(truth.pitch[i]) @ rot_x(truth.roll[i])
         pos = np.array([truth.e[i], truth.n[i], truth.u[i]]) + rot @ arm
@@ -304,8 +312,9 @@ def test_gnss_antenna_lever_arm_moves_position_and_velocity() -> None:
 # wheels, CAN speed, steering
 # ------------------------------------------------------------------------------------------
 def test_wheel_speeds_carry_scale_factors_and_quantisation() -> None:
-    config = SensorConfig.noiseless(wheel_scale_factor_std=0.01, wheel_resolution=0.01,
-                                    can_speed_resolution=0.01)
+    config = SensorConfig.noiseless(
+        wheel_scale_factor_std=0.01, wheel_resolution=0.01, can_speed_resolution=0.01
+    )
     truth = circle_truth(speed=15.0, radius=50.0)
     drive = make_drive(truth, config)
     sf = np.array(drive.meta["truth_sensor"]["wheel_scale_factor"])

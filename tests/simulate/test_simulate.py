@@ -75,10 +75,8 @@ def test_drive_is_complete_finite_and_self_describing(name: str) -> None:
 def test_reference_positions_are_the_integral_of_reference_velocities(name: str) -> None:
     drive = sim_drive(name, 0)
     yaw, vx, vy = drive["ref_yaw"], drive["ref_vx"], drive["ref_vy"]
-    e = drive["ref_e"][0] + cumulative_trapezoid(np.cos(yaw) * vx - np.sin(yaw) * vy, drive.t,
-                                                 initial=0.0)
-    n = drive["ref_n"][0] + cumulative_trapezoid(np.sin(yaw) * vx + np.cos(yaw) * vy, drive.t,
-                                                 initial=0.0)
+    e = drive["ref_e"][0] + cumulative_trapezoid(np.cos(yaw) * vx - np.sin(yaw) * vy, drive.t, initial=0.0)
+    n = drive["ref_n"][0] + cumulative_trapezoid(np.sin(yaw) * vx + np.cos(yaw) * vy, drive.t, initial=0.0)
     # Trapezoid at 10 ms against the truth's RK4 at 2.5 ms: measured <= 1 mm over 14 km.
     assert np.max(np.abs(e - drive["ref_e"])) < 0.01
     assert np.max(np.abs(n - drive["ref_n"])) < 0.01
@@ -94,8 +92,9 @@ def test_gnss_course_minus_reference_yaw_is_reference_beta_at_speed(name: str) -
     course = np.arctan2(vn[rows], ve[rows])
     # Noise off, antenna at the CG: exact up to round-off (the vertical velocity on a
     # graded road does not enter the horizontal course).
-    np.testing.assert_allclose(wrap_angle(course - drive["ref_yaw"][rows]),
-                               drive["ref_beta"][rows], atol=1e-9)
+    np.testing.assert_allclose(
+        wrap_angle(course - drive["ref_yaw"][rows]), drive["ref_beta"][rows], atol=1e-9
+    )
 
 
 @pytest.mark.parametrize("name", ["banked_turn", "dlc_bank", "urban_course"])
@@ -135,13 +134,13 @@ def test_scenario_sensor_overrides_are_applied() -> None:
 def test_explicit_config_replaces_the_scenario_overrides() -> None:
     drive = simulate("two_turns_gyro_sf", config=SensorConfig.noiseless())
     assert drive.meta["truth_sensor"]["gyro_scale_factor"] == 0.0
-    np.testing.assert_allclose(drive["wz"], drive["ref_r"] * np.cos(drive["ref_roll"])
-                               * np.cos(drive["ref_pitch"]), atol=2e-3)
+    np.testing.assert_allclose(
+        drive["wz"], drive["ref_r"] * np.cos(drive["ref_roll"]) * np.cos(drive["ref_pitch"]), atol=2e-3
+    )
 
 
 def test_same_seed_same_drive_other_seed_other_drive() -> None:
-    a, b, c = simulate("step_steer", seed=5), simulate("step_steer", seed=5), sim_drive(
-        "step_steer", 0)
+    a, b, c = simulate("step_steer", seed=5), simulate("step_steer", seed=5), sim_drive("step_steer", 0)
     for name in a.data:
         np.testing.assert_array_equal(a[name], b[name], err_msg=name)
     assert a.meta["truth_sensor"] != c.meta["truth_sensor"]
@@ -166,8 +165,7 @@ def test_drive_survives_a_parquet_round_trip(tmp_path) -> None:
         np.testing.assert_array_equal(back[name], drive[name], err_msg=name)
     assert back.meta["truth_sensor"]["gyro_bias"] == drive.meta["truth_sensor"]["gyro_bias"]
     assert back.meta["vehicle"] == "seed003_sedan"
-    assert math.isclose(back.meta["truth_sensor"]["steer_offset"],
-                        drive.meta["truth_sensor"]["steer_offset"])
+    assert math.isclose(back.meta["truth_sensor"]["steer_offset"], drive.meta["truth_sensor"]["steer_offset"])
 
 
 def test_scenario_runner_and_commonroad_do_not_import_each_other() -> None:

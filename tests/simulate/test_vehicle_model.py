@@ -18,6 +18,7 @@ from sideslip.simulate.vehicle_model import (
     simulate_truth_full,
 )
 from sideslip.vehicle import G, Vehicle, load_vehicle
+from tests.simulate.fingerprints import assert_matches, fingerprint, load
 
 SEDAN = load_vehicle("seed003_sedan")
 STRAIGHT = road_from_pieces(straight(2500.0), mu=((0.0, 0.9),))
@@ -222,35 +223,24 @@ def test_rear_drive_option_moves_the_slip_to_the_rear_wheels() -> None:
     assert np.all(truth.wheel_speed[accel, 2:].mean(axis=1) > truth.wheel_speed[accel, :2].mean(axis=1))
 
 
-# sha256 of every truth and diagnostics array of `run_scenario_full(name, seed=3, duration_s=d)`,
-# recorded on the tree before the 48-slot parameter vector became named fields
-# (model_params.ModelParams): the refactor must leave the simulated drives bit-identical.
-_RECORDED = {
-    "step_steer": (8.0, "55574e802c0777d0bff43580b198c848935f3f40c54356164c323f09c67b30ba", 152.71168651111046),
-    "slalom_low_mu": (8.0, "a90bea9efef860e2a7c47a2cf5b8d79d5dcccf8408b068d0927da6ce1735f872", 310.99142549571286),
-    "urban_course": (40.0, "7b2c09bbc96c1f6a92d00d0cfe4c62210d7757da9595feda811c20a334afc11a", 318.94035138325563),
-    "endurance": (30.0, "ced46273ecc682d35495bc613b0fa46ecd0169e1db44e4fd379511777a57a20c", 240.40328090209613),
-}
+# truth and diagnostics of `run_scenario_full(name, seed=3, duration_s=d)`, fingerprinted
+# (tests/simulate/fingerprints.py) from the tree whose drives the sha256 digests recorded before
+# the 48-slot parameter vector became named fields (model_params.ModelParams) had checked
+# bit-identical: a change of the model must show here.
+TRUTH_DURATIONS = {"step_steer": 8.0, "slalom_low_mu": 8.0, "urban_course": 40.0, "endurance": 30.0}
 
 
-@pytest.mark.parametrize("name", sorted(_RECORDED))
-def test_truth_is_bit_identical_to_the_recording_before_the_named_parameters(name: str) -> None:
-    import hashlib
-    from dataclasses import fields
-
+def truth_fingerprint(name: str, duration_s: float) -> dict[str, object]:
     from sideslip.simulate.scenarios import run_scenario_full
 
-    duration, digest, e_end = _RECORDED[name]
-    truth, diag = run_scenario_full(name, seed=3, duration_s=duration)
-    h = hashlib.sha256()
-    for obj in (truth, diag):
-        for f in fields(obj):
-            value = getattr(obj, f.name)
-            if isinstance(value, np.ndarray):
-                h.update(f.name.encode())
-                h.update(np.ascontiguousarray(value, dtype=np.float64).tobytes())
-    assert truth.e[-1] == e_end  # exact: a readable value beside the digest
-    assert h.hexdigest() == digest
+    truth, diag = run_scenario_full(name, seed=3, duration_s=duration_s)
+    out = fingerprint(truth, "truth.")
+    return fingerprint(diag, "diag.", out)
+
+
+@pytest.mark.parametrize("name", sorted(TRUTH_DURATIONS))
+def test_truth_matches_the_recording_before_the_named_parameters(name: str) -> None:
+    assert_matches(truth_fingerprint(name, TRUTH_DURATIONS[name]), load()[f"truth/{name}"])
 
 
 def test_model_params_are_named_fields_filled_from_the_vehicle() -> None:
