@@ -4,7 +4,10 @@ wrote).  Writes benchmarks/results/compare_methods.md.
 
 Run: .venv/bin/python benchmarks/compare_methods.py [--seed 0] [--method M ...] [--scenario S ...]
 With --method or --scenario the table is printed (and written only with --out), so a change to
-one method can be measured without touching the committed results.
+one method can be measured without touching the committed results.  ``--gnss positions`` runs
+every simulated scenario with issue 15's receiver instead: positions only at 20 Hz (no Doppler),
+50 ms late, the antenna 0.5 m ahead of where the vehicle file says; it writes
+benchmarks/results/compare_positions_only.md.
 """
 
 from __future__ import annotations
@@ -20,7 +23,7 @@ import numpy as np
 from sideslip.evaluate import SPEED_GATE, metrics
 from sideslip.frames import wrap_angle
 from sideslip.methods.registry import all_methods, run_method, why_not
-from sideslip.simulate import simulate
+from sideslip.simulate import SensorConfig, simulate
 from sideslip.vehicle import load_vehicle
 
 SCENARIOS = (
@@ -29,20 +32,35 @@ SCENARIOS = (
     "cr_step_steer", "cr_slalom", "cr_circle",
 )  # fmt: skip
 OUT = Path(__file__).parent / "results" / "compare_methods.md"
+OUT_POSITIONS = Path(__file__).parent / "results" / "compare_positions_only.md"
+# issue 15 point 4: a 20 Hz receiver without Doppler, its fixes 50 ms late, its antenna 0.5 m
+# ahead of where the vehicle file says (neither in any file)
+POSITIONS_ONLY = {
+    "gnss_rate_hz": 20.0,
+    "gnss_doppler": False,
+    "gnss_latency_s": 0.05,
+    "gnss_lever_offset_x": 0.5,
+}
 # Real drives, run when their data folder is present (../shared/data beside the repo); not in
 # the mean (most methods need GNSS or wheel speeds the lap lacks).  name -> (folder, vehicle).
 REVS_LAP = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "revs_250lm_20140222"
 REAL_DRIVES = {"revs_lap": (REVS_LAP, "revs_250lm")}
 
 
-def load_scenario(name: str, seed: int) -> tuple[object, object]:
-    """A scenario's drive and its right vehicle file (simulated, or a real drive converted)."""
+def load_scenario(name: str, seed: int, gnss: str = "doppler") -> tuple[object, object]:
+    """A scenario's drive and its right vehicle file (simulated, or a real drive converted);
+    ``gnss='positions'``: with the POSITIONS_ONLY receiver."""
     if name in REAL_DRIVES:
         from sideslip.io import convert
 
         folder, vehicle = REAL_DRIVES[name]
         return convert("revs", folder, None, None), load_vehicle(vehicle)
-    drive = simulate(name, seed=seed)
+    config = None
+    if gnss == "positions":
+        from sideslip.simulate.run import _lookup  # the scenario's own sensor overrides
+
+        config = SensorConfig().with_overrides(_lookup(name).sensor_overrides).with_overrides(POSITIONS_ONLY)
+    drive = simulate(name, seed=seed, config=config)
     return drive, load_vehicle(drive.meta["vehicle"])
 
 
@@ -55,15 +73,20 @@ def two_sigma_share(drive: object, est: object) -> float | None:
     return float(np.mean(err < 2 * est["beta_std"][gate]))  # type: ignore[index]
 
 
-def run(seed: int, only_methods: list[str] | None = None, only_scenarios: list[str] | None = None) -> str:
-    real = tuple(k for k, (folder, _) in REAL_DRIVES.items() if folder.is_dir())
+def run(
+    seed: int,
+    only_methods: list[str] | None = None,
+    only_scenarios: list[str] | None = None,
+    gnss: str = "doppler",
+) -> str:
+    real = tuple(k for k, (folder, _) in REAL_DRIVES.items() if folder.is_dir()) if gnss == "doppler" else ()
     scenarios = tuple(only_scenarios) if only_scenarios else SCENARIOS + real
     methods = [m for m in all_methods() if not only_methods or m in only_methods]
     table: dict[float, dict[str, dict[str, float]]] = {1.0: {}, 0.7: {}}
     share: dict[float, dict[str, dict[str, float]]] = {1.0: {}, 0.7: {}}
     start = time.perf_counter()
     for scenario in scenarios:
-        drive, base = load_scenario(scenario, seed)
+        drive, base = load_scenario(scenario, seed, gnss)
         for factor in (1.0, 0.7):
             vehicle = base.with_changes(cf=factor * base.cf, cr=factor * base.cr)
             row: dict[str, float] = {}
@@ -83,8 +106,14 @@ def run(seed: int, only_methods: list[str] | None = None, only_scenarios: list[s
             share[factor][scenario] = cov
         print(f"{scenario}: done ({time.perf_counter() - start:.0f} s)", flush=True)
     SCEN = scenarios
+    receiver = (
+        "  GNSS: positions only at 20 Hz (no Doppler), 50 ms late, the antenna 0.5 m ahead of "
+        "where the vehicle file says (issue 15 point 4; neither in any file)."
+        if gnss == "positions"
+        else ""
+    )
     lines = [
-        "# Every method on every scenario",
+        "# Every method on every scenario" + (" with positions-only GNSS" if gnss == "positions" else ""),
         "",
         f"Measured {dt.datetime.now(dt.UTC):%Y-%m-%d %H:%M} UTC by `benchmarks/compare_methods.py`, "
         f"seed {seed}.  Sideslip RMSE in degrees on rows faster than {SPEED_GATE:g} m/s; the best "
@@ -92,13 +121,20 @@ def run(seed: int, only_methods: list[str] | None = None, only_scenarios: list[s
         "model (an independent truth; vehicle file derived from its parameter set).  `revs_lap` "
         "is seed 002's real lap (Stanford Revs Ferrari 250 LM, `sideslip convert revs`, vehicle "
         "`revs_250lm`), run when ../shared/data is present.  The mean is over the simulated "
-        "scenarios, for methods that can run them all.",
+        "scenarios, for methods that can run them all." + receiver,
         "",
     ]
-    for factor, title in ((1.0, "right vehicle file"), (0.7, "cornering stiffness 30 % low in the vehicle file")):
+    for factor, title in (
+        (1.0, "right vehicle file"),
+        (0.7, "cornering stiffness 30 % low in the vehicle file"),
+    ):
         rows = table[factor]
-        lines += [f"## {title}", "", "| method | " + " | ".join(SCEN) + " | mean |",
-                  "|---|" + "---:|" * (len(SCEN) + 1)]
+        lines += [
+            f"## {title}",
+            "",
+            "| method | " + " | ".join(SCEN) + " | mean |",
+            "|---|" + "---:|" * (len(SCEN) + 1),
+        ]
         best = {sc: min(rows[sc].values()) for sc in SCEN if rows[sc]}
         means = {}
         for name in methods:
@@ -117,7 +153,9 @@ def run(seed: int, only_methods: list[str] | None = None, only_scenarios: list[s
             finite = [v for v in sim if v is not None]
             mean = float(np.mean(finite)) if finite and len(finite) == len(sim) else math.nan
             means[name] = mean
-            lines.append(f"| {name} | " + " | ".join(cells) + (f" | {mean:.3f} |" if math.isfinite(mean) else " | – |"))
+            lines.append(
+                f"| {name} | " + " | ".join(cells) + (f" | {mean:.3f} |" if math.isfinite(mean) else " | – |")
+            )
         ranked = sorted((v, k) for k, v in means.items() if math.isfinite(v))
         lines += ["", "Lowest mean: " + ", ".join(f"{k} {v:.3f}" for v, k in ranked[:5]) + ".", ""]
     for factor, title in ((1.0, "right vehicle file"), (0.7, "cornering stiffness 30 % low")):
@@ -125,8 +163,12 @@ def run(seed: int, only_methods: list[str] | None = None, only_scenarios: list[s
         names = [n for n in methods if any(n in cov[sc] for sc in SCEN)]
         if not names:
             continue
-        lines += [f"## Share of beta errors inside 2 beta_std ({title})", "",
-                  "| method | " + " | ".join(SCEN) + " | min |", "|---|" + "---:|" * (len(SCEN) + 1)]
+        lines += [
+            f"## Share of beta errors inside 2 beta_std ({title})",
+            "",
+            "| method | " + " | ".join(SCEN) + " | min |",
+            "|---|" + "---:|" * (len(SCEN) + 1),
+        ]
         for name in names:
             vals = [cov[sc].get(name) for sc in SCEN]
             cells = ["–" if v is None else f"{v:.2f}" for v in vals]
@@ -141,12 +183,21 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--method", action="append", help="only this method (repeatable)")
     parser.add_argument("--scenario", action="append", help="only this scenario (repeatable)")
-    parser.add_argument("--out", type=Path, help="write the table here (default: the results file "
-                        "for a full run, stdout for a partial one)")
+    parser.add_argument(
+        "--out",
+        type=Path,
+        help="write the table here (default: the results file for a full run, stdout for a partial one)",
+    )
+    parser.add_argument(
+        "--gnss",
+        choices=("doppler", "positions"),
+        default="doppler",
+        help="the scenarios' own receiver, or positions only (see above)",
+    )
     args = parser.parse_args()
-    text = run(args.seed, args.method, args.scenario)
+    text = run(args.seed, args.method, args.scenario, args.gnss)
     partial = bool(args.method or args.scenario)
-    out = args.out or (None if partial else OUT)
+    out = args.out or (None if partial else OUT_POSITIONS if args.gnss == "positions" else OUT)
     if out is None:
         print(text)
         return

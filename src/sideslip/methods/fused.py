@@ -350,8 +350,13 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     # yaw acceleration (without it the rear force leads the rear slip at turn-in).  Measured
     # without GNSS: step_steer 0.100 -> 0.019 deg, race_lap 0.115 -> 0.086, Revs lap 0.30 ->
     # 0.24; with GNSS (v_y measured) the same costs 4 % in the comparison's mean, so it is
-    # left off there
-    tyres_only = smooth and not (has_pos or has_vel) and nz.tyres_only_transients
+    # left off there.  GNSS positions without Doppler measure v_y only in transients: on an
+    # arc a constant error of the course draws the same track as a constant along-track offset
+    # of the fixes (their latency, an antenna lever arm the file does not state, the slow
+    # Gauss-Markov error), so there the tyres carry the slip as they do without GNSS
+    # (``positions_only_tyres``; below, in the stiffness's learning, the bank and beta_std)
+    tyres_carry = not has_vel and (not has_pos or nz.positions_only_tyres)
+    tyres_only = smooth and tyres_carry and nz.tyres_only_transients
     lp = _zero_phase_low_pass if tyres_only else _low_pass
     fy_lp = lp(t, ay * (1.0 - G * k_phi), tau_f)
     r_dot = _backward_rate(t, wz)
@@ -361,9 +366,16 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     f_rear = (geom[0] * fy_lp - iz_m * r_dot_lp) / wb
     # the causal filter learns the stiffness in quasi-steady cornering only (the lateral force
     # changing slower than filter_steady_jerk_m_s3); the smoother sees both sides of a
-    # transient and learns everywhere
+    # transient and learns everywhere, except from positions alone: on an arc they cannot
+    # tell the slip from an offset of the fixes (above), and a stiffness learned there takes
+    # that offset for tyre slip (banked_track_turn, 20 Hz fixes 50 ms late, antenna 0.5 m off:
+    # rear stiffness scale 0.36 +- 0.01 against a right file, beta RMSE 0.93 deg, 52 % inside
+    # 2 sigma), so it learns where the lateral force changes, where the track answers a change
+    # of slip within a second
     jerk = _low_pass(t, _backward_rate(t, fy_lp), tau_f)
-    steady = np.ones(n, dtype=bool) if smooth else np.abs(jerk) < nz.filter_steady_jerk_m_s3
+    steady = np.abs(jerk) < nz.filter_steady_jerk_m_s3
+    if smooth:
+        steady = ~steady if (tyres_carry and has_pos) else np.ones(n, dtype=bool)
     # the friction the road must at least have to transmit the measured acceleration
     mu_floor = np.hypot(_low_pass(t, ax, tau_f), fy_lp) / G
     use_front = bool(nz.front_axle and "steer" in drive and np.isfinite(drive["steer"]).any())
@@ -384,9 +396,9 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     # roll rate k_phi f_y'; the roll gyro's bias is the drive's mean roll rate off-line (the
     # body ends a drive about as level as it starts: 1 deg over 60 s is 3e-4 rad/s), 0 in the
     # causal filter (c_y's random walk carries the ramp g b_x).  Without wx, or with GNSS
-    # (which measures v_y), the input is 0 and c_y a random walk, as before
+    # Doppler (which measures v_y), the input is 0 and c_y a random walk, as before
     has_wx = "wx" in drive and bool(np.isfinite(drive["wx"]).any())
-    has_wx = has_wx and nz.roll_gyro_bank and not (has_pos or has_vel)
+    has_wx = has_wx and nz.roll_gyro_bank and tyres_carry
     bx = float(np.mean(wx)) if smooth and has_wx else 0.0
     road_roll = (wx - bx - k_phi * _backward_rate(t, fy_lp)) if has_wx else np.zeros(n)
     U = eng.block_means(idx, (wz, wx, wy, ax, ay, fy_lp, road_roll))
@@ -426,8 +438,9 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
         del wz, wy, fy_lp
     cfg = _config(nz, k_phi, calibrate, has_vel)
     # the axle noise identified from the innovations may fall below its prior only where GNSS
-    # gives v_y independently of the tyres (FusedSettings.adapt_min)
-    cfg[eng.C_ADAPT_MIN] = nz.adapt_min if (has_pos or has_vel) else 1.0
+    # gives v_y independently of the tyres (FusedSettings.adapt_min): not where the tyres
+    # carry the slip (no GNSS; positions alone, whose arcs agree with any slip the tyres say)
+    cfg[eng.C_ADAPT_MIN] = 1.0 if tyres_carry else nz.adapt_min
     xs, var, var_last, cov_vxvy, nis, counts = eng.run_nodes(
         tn, U, vw_n, *node_inputs, g_node, g_age, gn["gnss_e"], gn["gnss_n"], gn["pstd"],
         gn["gnss_ve"], gn["gnss_vn"], gn["vstd"], x0, P0, q, f_rows(nx), geom, lever, cfg, smooth,
@@ -489,7 +502,7 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     del nodes, node_vals, aux  # the row outputs hold what the series need
     est = _estimate(
         drive, vehicle, smooth, nz, rows, (j, w, aux_nodes), node_params, k_phi, fy_lp, wz, wy,
-        has_pos, has_vel, use_front,
+        has_pos, has_vel, use_front, tyres_carry,
     )  # fmt: skip
     return Estimate(est.method, est.t, est.series, est.params, _innovations(n, idx, nis))
 
@@ -628,6 +641,7 @@ def _estimate(
     has_pos: bool,
     has_vel: bool,
     use_front: bool,
+    tyres_carry: bool,
 ) -> Estimate:
     """Output series (from the per-row ``rows`` and, through ``aux = (j, w, node values of
     AUX_KEYS)``, the node-level terms of beta_std and the attitude) and params (the cues,
@@ -635,11 +649,12 @@ def _estimate(
     t = drive.t
     vx, vy = rows[IVX], rows[IVY]
     geom_v, _, _ = axle_geometry(vehicle)
-    # the tyre term (use_tyre): without GNSS nothing but the tyre relations pins v_y, and their
-    # error is correlated over whole corners: the rear slip angle carries the relation's
-    # relative error.  The causal filter is in that state in every corner: there the GNSS
-    # course rate is a_y / v whatever the gyro's scale, so GNSS tells slip from a gyro scale
-    # error only once the turn is complete, which the smoother sees and the filter has not yet.
+    # the tyre term (use_tyre): without GNSS (or with positions alone, in arcs: fuse) nothing
+    # but the tyre relations pins v_y, and their error is correlated over whole corners: the
+    # rear slip angle carries the relation's relative error.  The causal filter is in that
+    # state in every corner: there the GNSS course rate is a_y / v whatever the gyro's scale,
+    # so GNSS tells slip from a gyro scale error only once the turn is complete, which the
+    # smoother sees and the filter has not yet.
     # The rear slip also scales with the learned stiffness: its remaining relative
     # uncertainty is an error of the slip correlated over the whole drive, which the
     # covariance's white updates do not carry (banked_turn, file 30 % soft: 2-sigma share
@@ -647,7 +662,7 @@ def _estimate(
     j, w, aux_nodes = aux
     beta, beta_std, r, roll, bank, pitch = eng.row_outputs(
         t, vx, vy, rows[IBG], wz, wy, fy_lp, j, w, aux_nodes, k_phi, geom_v[1],
-        not (has_pos or has_vel) or not smooth, nz.force_rel, nz.force_sigma / geom_v[3],
+        tyres_carry or not smooth, nz.force_rel, nz.force_sigma / geom_v[3],
         nz.relaxation_m, math.radians(30.0), math.radians(5.0),
     )  # fmt: skip
     series = {
