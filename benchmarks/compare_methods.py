@@ -118,10 +118,15 @@ def run(
         f"Measured {dt.datetime.now(dt.UTC):%Y-%m-%d %H:%M} UTC by `benchmarks/compare_methods.py`, "
         f"seed {seed}.  Sideslip RMSE in degrees on rows faster than {SPEED_GATE:g} m/s; the best "
         "method of each scenario in bold.  `cr_*` scenarios come from CommonRoad's multi-body "
-        "model (an independent truth; vehicle file derived from its parameter set).  `revs_lap` "
-        "is seed 002's real lap (Stanford Revs Ferrari 250 LM, `sideslip convert revs`, vehicle "
-        "`revs_250lm`), run when ../shared/data is present.  The mean is over the simulated "
-        "scenarios, for methods that can run them all." + receiver,
+        "model (an independent truth; vehicle file derived from its parameter set).  "
+        + (
+            "`revs_lap` is seed 002's real lap (Stanford Revs Ferrari 250 LM, `sideslip convert "
+            "revs`, vehicle `revs_250lm`), run when ../shared/data is present.  "
+            if gnss == "doppler"
+            else ""
+        )
+        + "The mean is over the simulated scenarios, for methods that can run them all."
+        + receiver,
         "",
     ]
     for factor, title in (
