@@ -73,6 +73,8 @@ def test_positions_only_gnss_with_latency_and_unstated_lever_arm():
     vehicle = load_vehicle(drive.meta["vehicle"])
     est = run_method("fused", drive, vehicle)
     assert "gnss_position" in est.params["cues"] and "gnss_doppler" not in est.params["cues"]
+    assert "tyres carry the slip" in est.params["assumed"]["gnss_positions_only"]
+    assert "not identified" in est.params["assumed"]["gnss_latency_lever"]
     assert two_sigma_share(drive, est) >= 0.85
 
 

@@ -357,6 +357,18 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     # (``positions_only_tyres``; below, in the stiffness's learning, the bank and beta_std)
     tyres_carry = not has_vel and (not has_pos or nz.positions_only_tyres)
     tyres_only = smooth and tyres_carry and nz.tyres_only_transients
+    if has_pos and not has_vel:
+        if tyres_carry:
+            notes["gnss_positions_only"] = (
+                "no Doppler: in arcs the tyres carry the slip (a course error and an along-track "
+                "offset of the fixes draw the same track); the stiffness is learned where the "
+                "lateral force changes" + ("" if smooth else " and in quasi-steady cornering")
+            )
+        if not calibrate:
+            notes["gnss_latency_lever"] = (
+                f"not identified: position noise of {nz.latency_prior_sigma_s:g} s x speed and "
+                f"{nz.lever_prior_sigma_m:g} m (FusedSettings.identify_gnss_calibration)"
+            )
     lp = _zero_phase_low_pass if tyres_only else _low_pass
     fy_lp = lp(t, ay * (1.0 - G * k_phi), tau_f)
     r_dot = _backward_rate(t, wz)
