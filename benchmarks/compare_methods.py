@@ -29,7 +29,7 @@ from sideslip.vehicle import load_vehicle
 SCENARIOS = (
     "step_steer", "slalom_low_mu", "banked_turn", "dlc_bank", "two_turns_gyro_sf",
     "banked_track_turn", "urban_course", "urban_highway", "race_lap", "suburban_outages", "demo",
-    "cr_step_steer", "cr_slalom", "cr_circle",
+    "cr_step_steer", "cr_slalom", "cr_circle", "cr_limit_slalom", "cr_limit_ramp",
 )  # fmt: skip
 OUT = Path(__file__).parent / "results" / "compare_methods.md"
 OUT_POSITIONS = Path(__file__).parent / "results" / "compare_positions_only.md"

@@ -19,7 +19,7 @@ from sideslip.methods.registry import all_methods, run_method, why_not
 
 OUT = Path(__file__).parent / "results" / "no_gnss.md"
 SCENARIOS = ("step_steer", "slalom_low_mu", "banked_turn", "dlc_bank", "race_lap", "urban_course",
-             "cr_step_steer", "cr_slalom", "cr_circle")  # fmt: skip
+             "cr_step_steer", "cr_slalom", "cr_circle", "cr_limit_slalom", "cr_limit_ramp")  # fmt: skip
 OURS = ("fused", "fused_filter")
 
 

@@ -147,3 +147,55 @@ def test_the_estimate_carries_each_cues_nis_and_it_exposes_a_faulty_receiver() -
     m_clean = float(np.nanmean(clean.innovations["gnss_velocity_nis"][burst]))
     m_faulty = float(np.nanmean(faulty.innovations["gnss_velocity_nis"][burst]))
     assert m_faulty > 3.0 * m_clean
+
+
+def _check_config() -> np.ndarray:
+    cfg = np.zeros(eng.N_CFG)
+    cfg[eng.C_ACCEL_VRW] = 0.1
+    cfg[eng.C_VCHECK_ACCEL] = 0.1
+    cfg[eng.C_VCHECK_GATE] = 9.21
+    cfg[eng.C_VCHECK_TAU] = 2.0
+    return cfg
+
+
+def _new_check() -> np.ndarray:
+    return np.array([0.0, 0.0, 0.0, np.nan, 0.0, np.nan, 0.0, 0.0, 0.0])
+
+
+def test_doppler_check_passes_agreeing_epochs_and_inflates_a_lone_spike_only_there() -> None:
+    """Epochs that agree with the inertial anchor are taken as they are (factor 1); a lone
+    epoch 1 m/s off (20 sigma of a 0.05 m/s receiver) gets the variance of its distance,
+    1 + 0.5 * 1^2 / 0.05^2 = 201, and leaves nothing behind: the next epoch is factor 1."""
+    cfg, chk, var_g = _check_config(), _new_check(), 0.05**2
+    factors = [eng._doppler_check(chk, 0.1 * k, 20.0, 0.0, var_g, 0.0, cfg) for k in range(5)]
+    assert factors == [1.0] * 5
+    assert eng._doppler_check(chk, 0.5, 20.0, 1.0, var_g, 0.0, cfg) == pytest.approx(201.0)
+    assert eng._doppler_check(chk, 0.6, 20.0, 0.0, var_g, 0.0, cfg) == 1.0
+
+
+def test_doppler_check_keeps_a_burst_suspect_after_it_seems_to_end() -> None:
+    """Three epochs 0.5 m/s off in a row (a multipath burst) are each inflated; after the
+    second the excess 0.5 * 0.5^2 = 0.125 m^2/s^2 stays on the receiver, fading with tau 2 s:
+    the first epoch back on the anchor 0.1 s later carries 1 + 0.125 e^-0.05 / 0.0025."""
+    cfg, chk, var_g = _check_config(), _new_check(), 0.05**2
+    for k in range(3):
+        assert eng._doppler_check(chk, 0.1 * k, 20.0, 0.0, var_g, 0.0, cfg) == 1.0
+    inflated = [eng._doppler_check(chk, 0.3 + 0.1 * k, 20.0, 0.5, var_g, 0.0, cfg) for k in range(3)]
+    assert all(f > 50.0 for f in inflated)
+    after = eng._doppler_check(chk, 0.6, 20.0, 0.0, var_g, 0.0, cfg)
+    assert after == pytest.approx(1.0 + 0.125 * math.exp(-0.1 / 2.0) / var_g, rel=1e-9)
+    later = eng._doppler_check(chk, 6.5, 20.0, 0.0, var_g, 0.0, cfg)
+    assert 1.0 < later < 1.0 + 0.125 * math.exp(-5.0 / 2.0) / var_g + 1e-9
+
+
+def test_doppler_check_widens_with_the_roll_the_model_does_not_carry() -> None:
+    """On a bank ramp the body rolls and the velocity the accelerometers carry drifts by
+    g sin(roll change) per second: 0.1 rad of unmodelled roll over 1 s admits a 0.8 m/s
+    departure that the check alone (0.1 m/s^2, 0.1 m/s/sqrt(s): sigma 0.15 m/s) rejects."""
+    cfg, var_g = _check_config(), 0.05**2
+    for roll_since_anchor, expected in ((0.0, False), (0.1, True)):
+        chk = _new_check()
+        eng._doppler_check(chk, 0.0, 20.0, 0.0, var_g, 0.0, cfg)
+        chk[7] = roll_since_anchor
+        f = eng._doppler_check(chk, 1.0, 20.0, 0.8, var_g, 0.0, cfg)
+        assert (f == 1.0) is expected

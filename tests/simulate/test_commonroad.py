@@ -158,6 +158,30 @@ def test_cr_slalom_alternates_and_stays_finite() -> None:
         assert not np.isinf(drive[name]).any(), name
 
 
+def test_friction_moves_the_grip_limit_and_keeps_the_cornering_stiffness() -> None:
+    p = cr.parameters("bmw_320i")
+    q = cr.with_friction(p, 0.6)
+    assert q.tire.p_dy1 == pytest.approx(0.6)
+    assert q.tire.p_dx1 == pytest.approx(p.tire.p_dx1 * 0.6 / p.tire.p_dy1)
+    assert q.tire.p_ky1 == p.tire.p_ky1  # K_y = p_ky1 F_z: the vehicle file stays right
+    assert p.tire.p_dy1 > 1.0  # the cached set is untouched
+    with pytest.raises(ValueError, match=r"mu = -1.0: expected a number > 0"):
+        cr.with_friction(p, -1.0)
+
+
+@pytest.mark.parametrize(("name", "beta_min_deg"), [("cr_limit_slalom", 4.0), ("cr_limit_ramp", 0.8)])
+def test_limit_scenarios_reach_the_grip_of_a_mu_06_road(name: str, beta_min_deg: float) -> None:
+    """Both drive the tyres to the limit of mu 0.6: a_y within 10 % of mu g (never beyond it by
+    more than the model's load transfer and camber allow); the slalom saturates the rear axle
+    (large beta), the ramp the front (understeer, small beta); both carry multipath bursts."""
+    drive = sim_drive(name, 0)
+    ay = np.abs(drive["ref_ay"])
+    assert 0.9 * 0.6 * G < ay.max() < 1.1 * 0.6 * G
+    assert np.degrees(np.abs(drive["ref_beta"])).max() > beta_min_deg
+    assert drive.meta["truth_sensor"]["gnss_burst_epochs"] > 0
+    assert drive.meta["vehicle"] == "commonroad_bmw_320i"
+
+
 def test_cr_scenarios_refuse_another_vehicle() -> None:
     with pytest.raises(InputError, match=r"scenario 'cr_circle'.*expected no vehicle"):
         simulate("cr_circle", vehicle=load_vehicle("seed003_sedan"))

@@ -280,6 +280,42 @@ def test_multipath_epochs_are_rare_large_position_jumps() -> None:
     assert 0.3 < np.median(verr[hits]) < 0.9
 
 
+def test_multipath_bursts_are_runs_of_correlated_errors_with_configured_size() -> None:
+    rate, mean_s = 0.05, 2.0
+    config = SensorConfig.noiseless(gnss_burst_rate_hz=rate, gnss_burst_s=mean_s)
+    drive = make_drive(straight_truth(duration_s=3600.0, dt=0.1), config)
+    rows = finite_rows(drive, "gnss_e")
+    de = drive["gnss_e"][rows] - drive["ref_e"][rows]
+    dve = drive["gnss_ve"][rows] - 20.0
+    hit = np.abs(de) > 1e-9
+    ts = drive.meta["truth_sensor"]
+    assert hit.sum() == ts["gnss_burst_epochs"]
+    assert np.array_equal(np.round(drive.t[rows][hit][:1000], 6), ts["gnss_burst_t"])
+    # Poisson(180) bursts of exponential length (mean 20 epochs at 10 Hz): about 3600 epochs
+    # inside bursts (overlaps shave a few %); the count's 1-sigma is about 270, allow 4 sigma.
+    assert abs(hit.sum() - rate * 3600.0 * mean_s * 10.0) < 1100
+    # Inside bursts: 3 m per axis and 0.4 m/s (defaults), each within 15 % over ~180 bursts.
+    assert np.std(de[hit]) == pytest.approx(3.0, rel=0.15)
+    assert np.std(dve[hit]) == pytest.approx(0.4, rel=0.15)
+    # Correlated over gnss_burst_tau_s = 1 s: neighbouring epochs (0.1 s) correlate by
+    # exp(-0.1) = 0.90; white multipath would give 0.
+    pairs = hit[:-1] & hit[1:]
+    rho = np.corrcoef(dve[:-1][pairs], dve[1:][pairs])[0, 1]
+    assert rho == pytest.approx(math.exp(-0.1), abs=0.05)
+    # Runs, not spikes: the mean run of consecutive burst epochs is many epochs long.
+    edges = np.flatnonzero(np.diff(np.r_[0, hit.astype(np.int8), 0]))
+    assert np.mean(edges[1::2] - edges[::2]) > 10
+
+
+def test_drives_without_bursts_draw_nothing_for_them() -> None:
+    truth = straight_truth(duration_s=30.0)
+    plain = make_drive(truth, SensorConfig())
+    zero = make_drive(truth, SensorConfig(gnss_burst_rate_hz=0.0, gnss_burst_s=5.0))
+    for name in plain.data:
+        np.testing.assert_array_equal(plain[name], zero[name])
+    assert "gnss_burst_epochs" not in plain.meta["truth_sensor"]
+
+
 def test_gnss_position_error_is_gauss_markov_with_configured_sigma_and_tau() -> None:
     config = SensorConfig.noiseless(gnss_pos_gm_std=1.0, gnss_pos_tau_s=1.0)
     drive = make_drive(straight_truth(duration_s=7200.0, dt=0.1), config)
@@ -401,6 +437,7 @@ def test_defaults_match_the_papers_sensor_grades() -> None:
         ({"gyro_noise_std": -1.0}, "SensorConfig.gyro_noise_std = -1.0: expected a value >= 0"),
         ({"gnss_outages": ((5.0, 2.0),)}, "expected (t0, t1) pairs in s with t0 < t1"),
         ({"gnss_multipath_prob": 2.0}, "expected a probability in [0, 1]"),
+        ({"gnss_burst_s": 0.0}, "SensorConfig.gnss_burst_s: expected a time > 0 s"),
         ({"gnss_rate_hz": math.nan}, "SensorConfig.gnss_rate_hz = nan: expected a finite number"),
     ],
 )

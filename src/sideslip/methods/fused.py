@@ -313,6 +313,9 @@ def _config(nz: FusedSettings, k_phi: float, calibrate: bool, has_vel: bool) -> 
     cfg[eng.C_ADAPT_MAX] = nz.adapt_max
     cfg[eng.C_MU_UTIL] = nz.mu_utilisation
     cfg[eng.C_MU_FLOOR_SIGMA] = nz.mu_floor_sigma
+    cfg[eng.C_VCHECK_ACCEL] = nz.doppler_check_accel_sigma if nz.doppler_check else 0.0
+    cfg[eng.C_VCHECK_GATE] = nz.doppler_check_chi2
+    cfg[eng.C_VCHECK_TAU] = nz.doppler_check_tau_s
     return cfg
 
 

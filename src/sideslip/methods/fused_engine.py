@@ -58,6 +58,8 @@ from sideslip.models.fused_process import (
     IVX,
     IVY,
     U_AX,
+    U_FY,
+    U_WX,
     process_into,
     yaw_rate,
 )  # fmt: skip
@@ -91,7 +93,10 @@ from sideslip.vehicle import G
     C_WHEEL_SLIP_STIFFNESS,
 ) = range(24)
 C_ADAPT_MIN = 24  # the adaptive axle noise's smallest factor
-N_CFG = 25
+C_VCHECK_ACCEL = 25  # m/s^2: drift of the IMU-carried check velocity (0: no check)
+C_VCHECK_GATE = 26  # chi^2 (2 dof) of the check
+C_VCHECK_TAU = 27  # s: how long a disagreement keeps the receiver suspect
+N_CFG = 28
 
 # the states whose variance is kept at every node (the outputs' sigmas, the beta_std terms and
 # mu's params); ``VAR_COLUMN[state]`` is its column in the node variances.  The full diagonal
@@ -135,6 +140,63 @@ def _adapt(infl, nis, dt, cfg):
     while it is below 1 (time constant C_ADAPT_TAU), within [C_ADAPT_MIN, C_ADAPT_MAX]."""
     a = min(1.0, dt / cfg[C_ADAPT_TAU])
     return min(max(infl * math.exp(a * (min(nis, 25.0) - 1.0)), cfg[C_ADAPT_MIN]), cfg[C_ADAPT_MAX])
+
+
+@numba.njit(cache=True)
+def _nav_velocity(x):
+    """The CG's velocity over ground ``[v_e, v_n]`` (m/s) of state ``x``."""
+    c, s = math.cos(x[IPSI]), math.sin(x[IPSI])
+    return x[IVX] * c - x[IVY] * s, x[IVX] * s + x[IVY] * c
+
+
+@numba.njit(cache=True)
+def _doppler_check(chk, t, y_e, y_n, var_g, fy, cfg):
+    """Check a Doppler epoch (CG velocity ``y_e, y_n`` with per-axis variance ``var_g``)
+    against the IMU; returns the factor on ``var_g`` (1: taken as the receiver says).
+
+    ``chk = [v_e, v_n, variance at anchor, anchor time, suspect variance, its time,
+    consecutive disagreeing epochs, roll gyro angle since the anchor, f_y at the anchor]``.  The
+    anchor is the velocity of the last epoch that agreed with the inertial propagation,
+    carried forward by the process model's own velocity changes (:func:`forward_nodes`), so
+    neither the tyres nor the wheels enter it; its variance grows as a velocity random walk
+    plus an acceleration offset (``C_ACCEL_VRW``, ``C_VCHECK_ACCEL``: accelerometer offset,
+    gravity through roll and bank the model misses) and with gravity through the roll the body
+    turned since the anchor less the suspension roll the model carries (``fy`` the node's
+    low-passed lateral force, ``k_phi fy`` its roll): on a bank ramp the offset state c_y
+    lags the road, and without this term the check would take the GNSS, which is right,
+    for the culprit (banked_turn, 25 deg: a run of 40 epochs rejected).  An epoch outside the chi^2 gate
+    ``C_VCHECK_GATE`` disagrees with the accelerometers, which a multipath burst does and a
+    wrong tyre model does not: its variance grows to cover its distance from the anchor.
+    Multipath persists while the reflecting geometry lasts: after two or more disagreeing
+    epochs in a row (a burst; a lone spike is one epoch's business) their excess stays on
+    the following epochs, fading with ``C_VCHECK_TAU``, so that the tail of a burst, once
+    the anchor's own variance has grown to admit it, is not taken for white noise.  A run of disagreeing
+    epochs ends when the anchor's variance covers it (a wrong anchor cannot hold the filter
+    for long).  Innovation-based detection of GNSS faults against the inertial solution:
+    Groves 2013, *Principles of GNSS, Inertial, and Multisensor Integrated Navigation
+    Systems*, sec. 17.4."""
+    if cfg[C_VCHECK_ACCEL] <= 0.0:
+        return 1.0
+    if not math.isfinite(chk[3]):  # the first epoch anchors
+        chk[0], chk[1], chk[2], chk[3], chk[7], chk[8] = y_e, y_n, var_g, t, 0.0, fy
+        return 1.0
+    dt = max(t - chk[3], 0.0)
+    d_bank = chk[7] - cfg[C_K_PHI] * (fy - chk[8])  # roll not carried by the model, rad
+    var_c = chk[2] + cfg[C_ACCEL_VRW] ** 2 * dt + ((cfg[C_VCHECK_ACCEL] + G * abs(d_bank)) * dt) ** 2
+    de, dn = y_e - chk[0], y_n - chk[1]
+    dist2 = de * de + dn * dn
+    suspect = 0.0
+    if math.isfinite(chk[5]):
+        suspect = chk[4] * math.exp(-max(t - chk[5], 0.0) / cfg[C_VCHECK_TAU])
+    if dist2 <= cfg[C_VCHECK_GATE] * (var_g + var_c):
+        chk[0], chk[1], chk[2], chk[3], chk[7], chk[8] = y_e, y_n, var_g, t, 0.0, fy
+        chk[6] = 0.0
+        return 1.0 + suspect / var_g
+    excess = 0.5 * dist2  # per axis
+    chk[6] += 1.0
+    if chk[6] >= 2.0:
+        chk[4], chk[5] = max(excess, suspect), t
+    return 1.0 + max(excess, suspect) / var_g
 
 
 @numba.njit(cache=True)
@@ -228,9 +290,16 @@ def forward_nodes(
     ng = g_node.size
     t_vel_ok = tn[0]
     t_pos_ok = tn[0]
+    chk = np.array([0.0, 0.0, 0.0, np.nan, 0.0, np.nan, 0.0, 0.0, 0.0])  # the Doppler check (_doppler_check)
     for k in range(N):
         if k > 0:
             _predict(x, P, U[k - 1], tn[k] - tn[k - 1], cfg, q, rows, xn, Pn, F, dr, qk, tmp)
+            # the Doppler check follows the inertial prediction only, not the updates
+            ve0, vn0 = _nav_velocity(x)
+            ve1, vn1 = _nav_velocity(xn)
+            chk[0] += ve1 - ve0
+            chk[1] += vn1 - vn0
+            chk[7] += U[k - 1, U_WX] * (tn[k] - tn[k - 1])
             x[:] = xn
             P[:, :] = Pn
         dtk = tn[k] - tn[k - 1] if k > 0 else 0.0
@@ -317,11 +386,18 @@ def forward_nodes(
         while gi < ng and g_node[gi] == k:
             if math.isfinite(g_ve[gi]) and math.isfinite(g_vn[gi]):
                 he, hn = gnss_velocity(x, u, cfg[C_K_PHI], lever, H2, dr)
+                # the epoch against the inertial check, at the CG (less the antenna's lever
+                # velocity, which the model predicts)
+                ve_cg, vn_cg = _nav_velocity(x)
+                infl = _doppler_check(
+                    chk, tn[k], g_ve[gi] - (he - ve_cg), g_vn[gi] - (hn - vn_cg), g_vstd[gi] ** 2,
+                    u[U_FY], cfg,
+                )  # fmt: skip
                 # a run of rejected epochs longer than C_GNSS_RESET means the filter, not the
                 # receiver, is wrong: the next epoch is taken at full weight
                 g_gate = cfg[C_GATE_GNSS] if tn[k] - t_vel_ok < cfg[C_GNSS_RESET] else 1e300
                 d2 = update_robust_pair_ws_nb(
-                    x, P, H2, g_ve[gi] - he, g_vn[gi] - hn, g_vstd[gi] ** 2, g_gate, work
+                    x, P, H2, g_ve[gi] - he, g_vn[gi] - hn, g_vstd[gi] ** 2 * infl, g_gate, work
                 )
                 ok = d2 <= g_gate
                 if ok:

@@ -41,6 +41,7 @@ would meet a real car's body motion.
 
 from __future__ import annotations
 
+import copy
 import functools
 import importlib.util
 import math
@@ -101,6 +102,21 @@ def parameters(params: str) -> Any:
     return _cached_parameters(PARAMETER_SETS[params], setup_vehicle_parameters)
 
 
+def with_friction(p: Any, mu: float) -> Any:
+    """A copy of parameter object ``p`` on a road of friction coefficient ``mu``: the Magic
+    Formula peak factors ``p_dy1`` (lateral) and ``p_dx1`` (longitudinal) scaled so that
+    ``p_dy1 = mu``.  The cornering stiffness ``K_y = p_ky1 F_z`` does not depend on them
+    (``B = K / (C D)``: CommonRoad's ``tireModel``, Pacejka 2012 eq. 4.E), so the vehicle
+    file derived from the set stays right; only the grip limit moves."""
+    if not (math.isfinite(mu) and mu > 0.0):
+        raise ValueError(f"with_friction: mu = {mu!r}: expected a number > 0")
+    out = copy.deepcopy(p)
+    scale = mu / float(p.tire.p_dy1)
+    out.tire.p_dy1 = float(p.tire.p_dy1) * scale
+    out.tire.p_dx1 = float(p.tire.p_dx1) * scale
+    return out
+
+
 @functools.lru_cache(maxsize=8)
 def _cached_parameters(vehicle_id: int, setup: Callable[[int], Any]) -> Any:
     return setup(vehicle_id)
@@ -125,6 +141,7 @@ def commonroad_truth(
     accel: Profile | None = None,
     initial_speed: float | None = None,
     yaw0: float = 0.0,
+    mu: float | None = None,
 ) -> Truth:
     """Simulate CommonRoad's multi-body model and return the ISO/ENU :class:`Truth`.
 
@@ -134,6 +151,8 @@ def commonroad_truth(
     duration_s    simulated time, s;  dt: output time step, s
     params        CommonRoad parameter set (see :data:`PARAMETER_SETS`)
     initial_speed m/s (default: speed(0)); yaw0: initial heading, rad from East
+    mu            road friction coefficient (default: the set's own, p_dy1 ~ 1.05), see
+                  :func:`with_friction`
 
     State (CommonRoad, 29): see ``vehiclemodels.init_mb``; plus the integral of the speed
     error (m) for the PI loop.  Integrated with LSODA (the tyre/suspension modes are stiff),
@@ -145,7 +164,7 @@ def commonroad_truth(
 
     if (speed is None) == (accel is None):
         raise ValueError("commonroad_truth: give exactly one of speed= and accel=")
-    p = parameters(params)
+    p = parameters(params) if mu is None else with_friction(parameters(params), mu)
     from vehiclemodels.init_mb import init_mb
     from vehiclemodels.vehicle_dynamics_mb import vehicle_dynamics_mb
 
@@ -330,6 +349,24 @@ def _circle(t: float) -> float:
     return 0.05 * _ramp(t, 5.0, 7.0)
 
 
+def _limit_slalom(t: float) -> float:
+    """0.4 Hz slalom of 5 deg road wheel between straights: on mu 0.6 the rear axle
+    saturates in every swing (BMW 320i at 60 km/h: beta to about 5.5 deg, a_y 0.95 mu g)."""
+    fade = _ramp(t, 4.0, 6.0) * (1.0 - _ramp(t, 18.5, 20.0))
+    return 0.088 * fade * math.sin(2.0 * math.pi * 0.4 * (t - 4.0))
+
+
+def _limit_ramp(t: float) -> float:
+    """Constant-speed ramp steer (ISO 4138 style, 0.3 deg/s road wheel) past the limit
+    (understeer: the front axle saturates first, a_y 0.95 mu g), then back to straight."""
+    up = min(max((t - 3.0) / 20.0, 0.0), 1.0)
+    return 0.10 * up * (1.0 - _ramp(t, 24.0, 27.0))
+
+
+# GNSS multipath bursts of the limit scenarios: one starts every 12 s on average, lasts 2 s
+LIMIT_BURSTS: Mapping[str, Any] = {"gnss_burst_rate_hz": 1.0 / 12.0, "gnss_burst_s": 2.0}
+
+
 @dataclass(frozen=True)
 class CommonRoadScenario:
     """A CommonRoad-truth scenario: steer and speed profiles on a CommonRoad parameter set."""
@@ -342,6 +379,7 @@ class CommonRoadScenario:
     speed: float
     sensor_overrides: Mapping[str, Any] = field(default_factory=dict)
     paper: str = "CommonRoad multi-body model (Althoff & Wuersching 2020)"
+    mu: float | None = None  # road friction (default: the parameter set's own)
 
     @property
     def vehicle(self) -> str:
@@ -368,6 +406,18 @@ CR_SCENARIOS: dict[str, CommonRoadScenario] = {
             "flat",
             "vw_vanagon", 60.0, _circle, 45.0 / 3.6,
         ),
+        CommonRoadScenario(
+            "cr_limit_slalom",
+            "CommonRoad multi-body BMW 320i on mu 0.6: 0.4 Hz slalom at 60 km/h with the rear "
+            "axle saturating (beta to 5.5 deg), GNSS multipath bursts",
+            "bmw_320i", 26.0, _limit_slalom, 60.0 / 3.6, LIMIT_BURSTS, mu=0.6,
+        ),
+        CommonRoadScenario(
+            "cr_limit_ramp",
+            "CommonRoad multi-body BMW 320i on mu 0.6: ramp steer at 60 km/h into front-axle "
+            "saturation (0.95 mu g), GNSS multipath bursts",
+            "bmw_320i", 30.0, _limit_ramp, 60.0 / 3.6, LIMIT_BURSTS, mu=0.6,
+        ),
     )
 }  # fmt: skip
 
@@ -376,7 +426,7 @@ CR_SCENARIOS: dict[str, CommonRoadScenario] = {
 def scenario_truth(name: str, dt: float = 0.01) -> Truth:
     """The (deterministic) CommonRoad truth of a scenario in :data:`CR_SCENARIOS`, cached."""
     s = CR_SCENARIOS[name]
-    return commonroad_truth(s.steer, s.speed, s.duration_s, dt, s.params)
+    return commonroad_truth(s.steer, s.speed, s.duration_s, dt, s.params, mu=s.mu)
 
 
 def commonroad_drive(

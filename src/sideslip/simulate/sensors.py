@@ -27,10 +27,19 @@ antenna at ``l_ant = vehicle.gnss_xyz`` (m from the CG, body axes).
   Doppler velocity ``gnss_ve/vn/vu`` (m/s) ``= v_cg + R (omega_b x l_ant) + n_v
   (+ multipath)``.  ``e_GM`` is first-order Gauss-Markov per axis (time constant
   ``gnss_pos_tau_s``); multipath hits an epoch with probability ``gnss_multipath_prob``
-  (large position jump, smaller velocity spike, for that epoch only); outages remove every
-  GNSS row inside ``[t0, t1)``.  ``gnss_pos_std`` / ``gnss_vel_std`` report the nominal 1-sigma
-  per horizontal axis (a receiver does not know about its multipath).  Options for loggers
-  that differ from the vehicle file: ``gnss_doppler = False`` (positions only),
+  (large position jump, smaller velocity spike, for that epoch only); multipath *bursts*
+  (``gnss_burst_rate_hz`` > 0: reflections that persist while the geometry changes slowly,
+  e.g. beside a wall or under trees) start at random (Poisson, that many per second), last an
+  exponentially distributed time (mean ``gnss_burst_s``) and add to every epoch inside them a
+  Gauss-Markov error of position (1-sigma ``gnss_burst_pos_std`` per horizontal axis) and
+  velocity (``gnss_burst_vel_std``) with correlation time ``gnss_burst_tau_s``: a run of
+  moderately wrong epochs that agree with each other, which a per-epoch gate does not catch
+  (multipath errors correlated over seconds in a moving vehicle: Groves, *Principles of
+  GNSS, Inertial, and Multisensor Integrated Navigation Systems*, 2nd ed. 2013, sec. 9.3.5);
+  outages remove every GNSS row inside ``[t0, t1)``.  ``gnss_pos_std`` / ``gnss_vel_std``
+  report the nominal 1-sigma per horizontal axis (a receiver does not know about its
+  multipath).  Options for loggers that differ from the vehicle file:
+  ``gnss_doppler = False`` (positions only),
   ``gnss_latency_s`` (each epoch reports the truth that long before its time stamp, rounded
   to the table's step), ``gnss_lever_offset_x/y`` (the antenna is not where the vehicle
   file says).  Their defaults leave every drive as it was.
@@ -122,6 +131,11 @@ class SensorConfig:
     gnss_multipath_prob: float = 0.002  # probability that an epoch is a multipath outlier
     gnss_multipath_pos_std: float = 8.0  # position jump per horizontal axis, m
     gnss_multipath_vel_std: float = 0.5  # velocity spike per horizontal axis, m/s
+    gnss_burst_rate_hz: float = 0.0  # multipath bursts starting per second of drive (0: none)
+    gnss_burst_s: float = 2.0  # their mean length, s
+    gnss_burst_pos_std: float = 3.0  # position error inside a burst per horizontal axis, m
+    gnss_burst_vel_std: float = 0.4  # velocity error inside a burst per horizontal axis, m/s
+    gnss_burst_tau_s: float = 1.0  # correlation time of the error inside a burst, s
     gnss_outages: tuple[tuple[float, float], ...] = ()  # (t0, t1) windows without GNSS, s
     gnss_doppler: bool = True  # False: positions only (no gnss_ve/vn/vu, no gnss_vel_std)
     gnss_latency_s: float = 0.0  # each epoch reports the truth this long before its stamp, s
@@ -165,8 +179,9 @@ class SensorConfig:
                 f"SensorConfig.gnss_multipath_prob = {self.gnss_multipath_prob!r}: "
                 "expected a probability in [0, 1]"
             )
-        if self.gnss_pos_tau_s <= 0.0:
-            raise ValueError("SensorConfig.gnss_pos_tau_s: expected a time constant > 0 s")
+        for name in ("gnss_pos_tau_s", "gnss_burst_s", "gnss_burst_tau_s"):
+            if getattr(self, name) <= 0.0:
+                raise ValueError(f"SensorConfig.{name}: expected a time > 0 s")
 
     @classmethod
     def noiseless(cls, **changes: Any) -> SensorConfig:
@@ -176,9 +191,9 @@ class SensorConfig:
             f.name: 0.0
             for f in fields(cls)
             if f.name.endswith(("_std", "_std_up", "_walk", "_resolution"))
-            and not f.name.startswith("gnss_multipath")  # sizes kept; probability set to 0
+            and not f.name.startswith(("gnss_multipath", "gnss_burst"))  # sizes kept, rates 0
         }
-        zero.update(gnss_multipath_prob=0.0, wheel_min_speed=0.0)
+        zero.update(gnss_multipath_prob=0.0, gnss_burst_rate_hz=0.0, wheel_min_speed=0.0)
         zero.update(changes)
         return cls(**zero)
 
@@ -408,6 +423,9 @@ def gnss(
         up = np.array([1.0, 1.0, 2.0])  # multipath is worse vertically
         pos[hit] += rng.standard_normal((n_hit, 3)) * config.gnss_multipath_pos_std * up
         vel[hit] += rng.standard_normal((n_hit, 3)) * config.gnss_multipath_vel_std * up
+    in_burst = np.zeros(m, dtype=bool)
+    if config.gnss_burst_rate_hz > 0.0:  # drawn only when asked: other drives keep their bits
+        in_burst = _multipath_bursts(rng, truth.t[epochs], config, pos, vel)
 
     keep = np.ones(m, dtype=bool)
     te = truth.t[epochs]
@@ -430,7 +448,34 @@ def gnss(
         "gnss_multipath_epochs": int((hit & keep).sum()),
         "gnss_multipath_t": truth.t[epochs[hit & keep]].round(6).tolist()[:1000],
     }
+    if config.gnss_burst_rate_hz > 0.0:
+        drawn["gnss_burst_epochs"] = int((in_burst & keep).sum())
+        drawn["gnss_burst_t"] = truth.t[epochs[in_burst & keep]].round(6).tolist()[:1000]
     return cols, drawn
+
+
+def _multipath_bursts(
+    rng: np.random.Generator, te: FloatArray, config: SensorConfig, pos: FloatArray, vel: FloatArray
+) -> NDArray[np.bool_]:
+    """Add multipath bursts (module docstring) to the epochs at times ``te`` in place; returns
+    which epochs lie inside a burst.  Starts: a Poisson process of rate gnss_burst_rate_hz;
+    lengths: exponential, mean gnss_burst_s; errors: horizontal Gauss-Markov per burst
+    (stationary from its first epoch), vertical twice the horizontal."""
+    span = float(te[-1] - te[0]) if te.size else 0.0
+    n_bursts = int(rng.poisson(config.gnss_burst_rate_hz * span)) if span > 0 else 0
+    starts = np.sort(rng.uniform(te[0], te[-1], n_bursts)) if n_bursts else np.zeros(0)
+    lengths = rng.exponential(config.gnss_burst_s, n_bursts)
+    inside = np.zeros(te.size, dtype=bool)
+    up = np.array([1.0, 1.0, 2.0])
+    dt = 1.0 / config.gnss_rate_hz
+    for t0, length in zip(starts, lengths, strict=True):
+        k = np.flatnonzero((te >= t0) & (te < t0 + length))
+        if not k.size:
+            continue
+        inside[k] = True
+        pos[k] += _gauss_markov(rng, k.size, dt, config.gnss_burst_tau_s, config.gnss_burst_pos_std * up)
+        vel[k] += _gauss_markov(rng, k.size, dt, config.gnss_burst_tau_s, config.gnss_burst_vel_std * up)
+    return inside
 
 
 def reference_columns(truth: Truth) -> dict[str, FloatArray]:
