@@ -9,6 +9,7 @@ import pytest
 
 from sideslip import gnss
 from sideslip.drive import drive_from_columns
+from sideslip.frames import wrap_angle
 from sideslip.vehicle import load_vehicle
 
 
@@ -68,7 +69,8 @@ def test_positions_used_when_no_doppler_with_their_fix_to_fix_sigma() -> None:
     vel = gnss.velocity_samples(d)
     assert vel.source == "positions"
     np.testing.assert_allclose(vel.speed, 20.0, rtol=1e-9)
-    assert vel.sigma[0] == pytest.approx(math.sqrt(2) * 0.45 * gnss.POS_SIGMA_DEFAULT_M / 0.1)
+    # 10 Hz fixes: differenced over the 1 s baseline (DIFFERENCE_BASELINE_S), centred
+    assert vel.sigma[0] == pytest.approx(math.sqrt(2) * 0.45 * gnss.POS_SIGMA_DEFAULT_M / 1.0)
     assert gnss.doppler_samples(d).rows.size == 0
 
 
@@ -102,3 +104,58 @@ def test_course_at_cg_drops_a_multipath_sample() -> None:
     cm = gnss.course_at_cg(bad, load_vehicle("blazer_suv"), np.full(len(bad), 20.0))
     assert np.isnan(cm.course[150])
     assert np.isfinite(cm.course[149]) and np.isfinite(cm.course[151])
+
+
+def _circle_fixes(rate_hz: float, radius: float = 80.0, speed: float = 20.0, duration: float = 20.0,
+                  noise_m: float = 0.0, seed: int = 0) -> tuple[object, float]:  # fmt: skip
+    """A 100 Hz drive on a left circle whose fixes arrive at ``rate_hz`` (no Doppler)."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(round(duration * 100) + 1) * 0.01
+    ang = speed / radius * t
+    cols: dict[str, np.ndarray] = {"t": t, "v_rl": np.full(t.size, speed), "v_rr": np.full(t.size, speed)}
+    step = round(100 / rate_hz)
+    fix = np.arange(t.size) % step == 0
+    cols["gnss_e"] = np.where(fix, radius * np.sin(ang) + rng.normal(0, noise_m, t.size), np.nan)
+    cols["gnss_n"] = np.where(fix, radius * (1 - np.cos(ang)) + rng.normal(0, noise_m, t.size), np.nan)
+    return drive_from_columns(cols, {}), speed / radius
+
+
+def test_fast_fixes_give_a_centred_course_over_a_one_second_baseline() -> None:
+    """20 Hz fixes on a circle (r = 0.25 rad/s): the course comes from the fixes half a
+    second before and after each one, so it is the tangent at the fix (a chord's direction is
+    the tangent at its middle on a circle), not 0.125 rad behind it; 0.1 m of fix noise over a
+    1 s (20 m) baseline turns it by ~0.4 deg, where two fixes 50 ms apart give ~8 deg."""
+    drive, rate = _circle_fixes(20.0)
+    vel = gnss.velocity_samples(drive)
+    truth = rate * drive.t[vel.rows]
+    assert np.max(np.abs(wrap_angle(np.arctan2(vel.vn, vel.ve) - truth))) < 1e-9
+    assert np.hypot(vel.ve, vel.vn) == pytest.approx(20.0 * math.sin(0.125) / 0.125, rel=1e-9)
+    assert drive.t[vel.rows][0] == pytest.approx(0.5) and drive.t[vel.rows][-1] == pytest.approx(19.5)
+    noisy, _ = _circle_fixes(20.0, noise_m=0.1, seed=3)
+    vel = gnss.velocity_samples(noisy)
+    err = wrap_angle(np.arctan2(vel.vn, vel.ve) - rate * noisy.t[vel.rows])
+    assert math.degrees(np.std(err)) < 0.6
+
+
+def test_slow_fixes_are_differenced_with_the_previous_one() -> None:
+    drive, rate = _circle_fixes(1.0)
+    vel = gnss.velocity_samples(drive)
+    # stamped at the later fix: the chord's direction lags the tangent by half a step
+    assert drive.t[vel.rows][0] == pytest.approx(1.0)
+    course = np.arctan2(vel.vn, vel.ve)
+    assert np.allclose(wrap_angle(course - rate * (drive.t[vel.rows] - 0.5)), 0.0, atol=1e-9)
+
+
+def test_course_from_fixes_spans_ten_metres_and_resists_a_repeated_first_fix() -> None:
+    """A receiver that repeats its first position (or two noisy fixes 50 ms apart) gives no
+    course; the first 10 m of fixes give the straight line's 0.4 rad."""
+    d = _drive(doppler=False)
+    e, n = d["gnss_e"].copy(), d["gnss_n"].copy()
+    e[1], n[1] = e[0] + 0.05, n[0] - 0.05  # a second fix a few cm off the first, sideways
+    from dataclasses import replace
+
+    d = replace(d, data={**d.data, "gnss_e": e, "gnss_n": n})
+    course, t_a, t_b = gnss.course_from_fixes(d)
+    assert course == pytest.approx(0.4, abs=0.01)
+    assert t_b - t_a == pytest.approx(0.6)  # 12 m at 20 m/s: the first fix beyond 10 m
+    assert gnss.course_from_fixes(_drive(doppler=False, n=2)) is None

@@ -47,6 +47,8 @@ POS_SIGMA_DEFAULT_M = 1.5  # standalone code-phase position 1-sigma per axis whe
 POS_WHITE_FRACTION = 0.45  # share of the position 1-sigma that is white from fix to fix
 COURSE_SIGMA_FLOOR_RAD = math.radians(0.1)  # antenna / multipath floor of the Doppler course
 COURSE_SIGMA_MAX_RAD = math.radians(5.0)  # poorer course samples are not used
+CONSECUTIVE_MAX_HZ = 1.5  # fixes at this rate or slower: velocity from consecutive fixes
+DIFFERENCE_BASELINE_S = 1.0  # faster fixes: velocity over this baseline, centred
 COURSE_MIN_SPEED_M_S = 3.0  # default speed gate of the course
 
 
@@ -123,7 +125,12 @@ def velocity_samples(
     least ``floor_sigma_m_s``: a filter's floor for receivers that claim too much) for Doppler and
     sqrt(2) w sigma_pos / dt for differenced fixes, w = :data:`POS_WHITE_FRACTION` the share of
     the position error that changes from fix to fix (the slow part cancels in the difference;
-    the same split as the seed-004 EKF's GNSS model).
+    the same split as the seed-004 EKF's GNSS model).  Fixes up to
+    :data:`CONSECUTIVE_MAX_HZ` are differenced with the previous one (stamped at the later);
+    faster ones over :data:`DIFFERENCE_BASELINE_S` centred on the fix (the fixes nearest
+    half a baseline before and after, where no gap lies between), since over one 50 ms step
+    of a 20 Hz receiver the white noise alone turns the course by tens of degrees, and a
+    baseline ending at the fix would lag the course by half the baseline in every turn.
     """
     empty = VelocitySamples(np.zeros(0, dtype=np.intp), np.zeros(0), np.zeros(0), np.zeros(0), "")
     if "gnss_ve" in drive and "gnss_vn" in drive:
@@ -136,11 +143,55 @@ def velocity_samples(
     pos = position_samples(drive)
     if pos.rows.size < 2:
         return empty
-    dt = np.diff(drive.t[pos.rows])
-    ve = np.diff(pos.e) / dt
-    vn = np.diff(pos.n) / dt
-    sig = math.sqrt(2.0) * POS_WHITE_FRACTION * np.maximum(pos.sigma[1:], pos.sigma[:-1]) / dt
-    return VelocitySamples(pos.rows[1:], ve, vn, sig, "positions")
+    tf = drive.t[pos.rows]
+    if np.median(np.diff(tf)) >= 1.0 / CONSECUTIVE_MAX_HZ:
+        dt = np.diff(tf)
+        ve = np.diff(pos.e) / dt
+        vn = np.diff(pos.n) / dt
+        sig = math.sqrt(2.0) * POS_WHITE_FRACTION * np.maximum(pos.sigma[1:], pos.sigma[:-1]) / dt
+        return VelocitySamples(pos.rows[1:], ve, vn, sig, "positions")
+    half = 0.5 * DIFFERENCE_BASELINE_S
+    step = float(np.median(np.diff(tf)))
+    tol = 0.25 * step  # time stamps carry rounding: a fix a hair inside half counts
+    a = np.searchsorted(tf, tf - half + tol, side="right") - 1  # last fix at or before t - half
+    b = np.searchsorted(tf, tf + half - tol, side="left")  # first fix at or after t + half
+    ok = (a >= 0) & (b < tf.size)
+    a, b, k = a[ok], b[ok], np.flatnonzero(ok)
+    dt = tf[b] - tf[a]
+    # no gap inside the baseline: its fixes span at most the baseline and two fix steps
+    ok = dt <= DIFFERENCE_BASELINE_S + 2.5 * step
+    a, b, k, dt = a[ok], b[ok], k[ok], dt[ok]
+    ve = (pos.e[b] - pos.e[a]) / dt
+    vn = (pos.n[b] - pos.n[a]) / dt
+    sig = math.sqrt(2.0) * POS_WHITE_FRACTION * np.maximum(pos.sigma[a], pos.sigma[b]) / dt
+    return VelocitySamples(pos.rows[k], ve, vn, sig, "positions")
+
+
+BASELINE_COURSE_M = 10.0  # travel over which a course from fixes is taken (initial heading)
+
+
+def course_from_fixes(
+    drive: Drive, baseline_m: float = BASELINE_COURSE_M, max_span_s: float = 5.0
+) -> tuple[float, float, float] | None:
+    """Course (rad, ENU from East) over the first ``baseline_m`` the antenna travels within
+    ``max_span_s``, from the fixes, with the times (s) of the baseline's first fix and of
+    the fix that closes it; None when the fixes never cover it.  Two fixes a twentieth of a
+    second apart give a course of +-10 deg from 0.1 m of noise (and any multipath jump, or a
+    receiver that repeats its first position, gives nonsense); a 10 m baseline about 1 deg.
+    The median direction to the next five fixes beyond the baseline resists one bad fix."""
+    ok = np.flatnonzero(np.isfinite(column(drive, "gnss_e")) & np.isfinite(column(drive, "gnss_n")))
+    if ok.size < 3:
+        return None
+    e, n = drive["gnss_e"][ok], drive["gnss_n"][ok]
+    for i in range(min(ok.size - 1, 200)):
+        d = np.hypot(e[i + 1 :] - e[i], n[i + 1 :] - n[i])
+        far = np.flatnonzero(d > baseline_m)
+        if far.size and drive.t[ok[i + 1 + far[0]]] - drive.t[ok[i]] < max_span_s:
+            j = i + 1 + far[0]
+            js = np.arange(j, min(j + 5, ok.size))
+            courses = np.arctan2(n[js] - n[i], e[js] - e[i])
+            return float(np.angle(np.exp(1j * courses).sum())), float(drive.t[ok[i]]), float(drive.t[ok[j]])
+    return None
 
 
 @dataclass(frozen=True)

@@ -227,7 +227,9 @@ def _initial_state(drive: Drive, vw: FloatArray, nx: int, nz: FusedSettings) -> 
     rows, course, _ = gnss_course(drive, min_speed=3.0)
     x0[IPSI] = course[0] if rows.size else 0.0
     if "gnss_ve" not in drive and "gnss_e" in drive and "gnss_n" in drive:
-        x0[IPSI] = _initial_course_from_fixes(drive, x0[IPSI])
+        # a course over 10 m of fixes, not the first two (gnss.course_from_fixes)
+        fixes = gnss.course_from_fixes(drive)
+        x0[IPSI] = fixes[0] if fixes is not None else x0[IPSI]
     if "gnss_e" in drive and "gnss_n" in drive:
         ok = np.flatnonzero(np.isfinite(drive["gnss_e"]) & np.isfinite(drive["gnss_n"]))
         if ok.size:
@@ -247,26 +249,6 @@ def _initial_state(drive: Drive, vw: FloatArray, nx: int, nz: FusedSettings) -> 
         sig[ITAU] = nz.latency_prior_sigma_s
         sig[ILX] = sig[ILY] = nz.lever_prior_sigma_m
     return x0, np.diag(sig**2)
-
-
-def _initial_course_from_fixes(drive: Drive, fallback: float) -> float:
-    """Course (rad) over the first >= 10 m the antenna travels, from the fixes: two fixes a
-    twentieth of a second apart give a course of +-10 deg from 0.1 m noise (and any multipath
-    jump gives nonsense), a 10 m baseline about 1 deg."""
-    ok = np.flatnonzero(np.isfinite(drive["gnss_e"]) & np.isfinite(drive["gnss_n"]))
-    if ok.size < 3:
-        return fallback
-    e, n = drive["gnss_e"][ok], drive["gnss_n"][ok]
-    for i in range(min(ok.size - 1, 200)):
-        d = np.hypot(e[i + 1 :] - e[i], n[i + 1 :] - n[i])
-        far = np.flatnonzero(d > 10.0)
-        if far.size and drive.t[ok[i + 1 + far[0]]] - drive.t[ok[i]] < 5.0:
-            j = i + 1 + far[0]
-            # the median of the courses to the next fixes beyond 10 m resists one bad fix
-            js = np.arange(j, min(j + 5, ok.size))
-            courses = np.arctan2(n[js] - n[i], e[js] - e[i])
-            return float(np.angle(np.exp(1j * courses).sum()))
-    return fallback
 
 
 def _process_psd(nx: int, nz: FusedSettings) -> FloatArray:

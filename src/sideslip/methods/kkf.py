@@ -171,6 +171,18 @@ def kkf_gyro_sigma(drive: Drive, settings: KkfSettings) -> tuple[float, str]:
     return SIGMA_GYRO_100HZ, "typical"
 
 
+def course_rate_window(course_sigma: FloatArray, gnss_dt: float) -> float:
+    """Window (s) of the course rate that judges straight driving: STRAIGHT_WINDOW_S, at
+    least two GNSS steps, and long enough that the course's own noise leaves the rate (a
+    difference over the window, sqrt(2) sigma / window) below STRAIGHT_ON: a Doppler course
+    (0.002 rad at 20 m/s) keeps 1 s, a course from 20 Hz fixes over a 1 s baseline (0.03 rad
+    as the receiver's sigma has it) needs 4 s; with 1 s, kkf never saw a straight on such a
+    drive and its heading drifted with the gyro bias (demo: 33 deg in 56 s)."""
+    sig = course_sigma[np.isfinite(course_sigma)]
+    need = math.sqrt(2.0) * float(np.median(sig)) / STRAIGHT_ON if sig.size else 0.0
+    return max(STRAIGHT_WINDOW_S, 2.0 * gnss_dt, need)
+
+
 def _course_rate(t: FloatArray, course: FloatArray, window_s: float) -> FloatArray:
     """Causal GNSS course rate (rad/s) on every row: slope of the unwrapped course over the
     last ``window_s``, held until the next course; NaN when unknown or stale."""
@@ -450,7 +462,7 @@ def run_kkf(
     rows = np.flatnonzero(np.isfinite(cm.course))
     gnss_dt = float(np.median(np.diff(t[rows]))) if rows.size > 1 else 0.1
     del rows
-    x0 = np.array([initial_heading(t, wz, cm.course), 0.0, 0.0])
+    x0 = np.array([initial_heading(t, wz, cm.course, drive), 0.0, 0.0])
     P0 = np.diag([SIGMA_PSI0**2, SIGMA_BIAS0**2, SIGMA_SCALE0**2 if estimate_scale else 0.0])
     # the yaw-rate lever-arm term of the course (rx r / V) is removed with the raw gyro
     course = np.where(np.isfinite(cm.course), cm.course - cm.hr * np.nan_to_num(wz), np.nan)
@@ -460,7 +472,7 @@ def run_kkf(
     inputs = [
         wz, causal_mean(t, wz, STRAIGHT_WINDOW_S), causal_mean(t, wz, STRAIGHT_FAST_S),
         sample_variance(t, g_sigma), course, cm.sigma**2,
-        _course_rate(t, cm.course, max(STRAIGHT_WINDOW_S, 2.0 * gnss_dt)), speed,
+        _course_rate(t, cm.course, course_rate_window(cm.sigma, gnss_dt)), speed,
         np.abs(speed) < STANDSTILL_SPEED,
     ]  # fmt: skip
 

@@ -224,15 +224,29 @@ class MkfProblem:
     gyro_sigma_source: str = "typical"
 
 
-def initial_heading(t: FloatArray, wz: FloatArray, course: FloatArray) -> float:
-    """psi(t0) from the first fresh course minus the gyro integrated up to it (beta ~ 0)."""
-    rows = np.flatnonzero(np.isfinite(course))
-    if rows.size == 0:
-        return 0.0
-    j = int(rows[0])
+def initial_heading(t: FloatArray, wz: FloatArray, course: FloatArray, drive: Drive | None = None) -> float:
+    """psi(t0) from the first fresh course minus the gyro integrated up to it (beta ~ 0).
+
+    Without Doppler (``drive`` given, positions only) the course is the one over the first
+    10 m of fixes (:func:`sideslip.gnss.course_from_fixes`) at the middle of that baseline: a
+    course from two successive fixes is noise-dominated at 20 Hz (a 20 Hz drive whose first
+    two fixes repeat one position gave kkf a heading 65 deg off that it never recovered,
+    since its noisy course rate never looked straight)."""
+    fixes = None
+    if drive is not None and "gnss_ve" not in drive and "gnss_e" in drive and "gnss_n" in drive:
+        fixes = gnss.course_from_fixes(drive)
+    if fixes is not None:
+        value, t_a, t_b = fixes
+        j = int(np.searchsorted(t, 0.5 * (t_a + t_b)))
+    else:
+        rows = np.flatnonzero(np.isfinite(course))
+        if rows.size == 0:
+            return 0.0
+        j = int(rows[0])
+        value = float(course[j])
     w = np.nan_to_num(wz[:j])
     turned = float(np.sum(w * np.diff(t[: j + 1]))) if j > 0 else 0.0
-    return float(course[j] - turned)
+    return float(value - turned)
 
 
 def mkf_problem(
@@ -257,7 +271,7 @@ def mkf_problem(
     tab = model_table(vehicle, t, speed, st.noise(), st.v_gate_m_s, split=tune_sy or tune_b)
     cm = gnss.course_at_cg(drive, vehicle, speed, st.v_gate_m_s)
     wz = drive["wz"]
-    x0 = np.array([0.0, 0.0, initial_heading(t, wz, cm.course), 0.0])
+    x0 = np.array([0.0, 0.0, initial_heading(t, wz, cm.course, drive), 0.0])
     P0 = np.diag([SIGMA_BETA0, SIGMA_R0, SIGMA_PSI0, SIGMA_BIAS0]) ** 2
     g_sigma, g_source = gyro_sigma(drive, st)
     prob = MkfProblem(
