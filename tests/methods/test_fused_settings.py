@@ -30,6 +30,8 @@ def test_a_bad_setting_is_one_clear_error():
     """Every numeric field must be finite and > 0 (step_s >= 0); the message names it."""
     with pytest.raises(ValueError, match=r"FusedSettings.force_noise_sigma = 0.0: expected a finite number > 0"):
         FusedSettings(force_noise_sigma=0.0)
+    with pytest.raises(ValueError, match=r"axle_curve_shape = 0.5: expected 0 \(brush curve\) or a Magic"):
+        FusedSettings(axle_curve_shape=0.5)
     with pytest.raises(ValueError, match=r"FusedSettings.wheel_slip_stiffness = nan: expected"):
         FusedSettings(wheel_slip_stiffness=float("nan"))
 

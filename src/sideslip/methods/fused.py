@@ -324,6 +324,7 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     nx = NX_CORE + (NX_GNSS_CAL if calibrate else 0)
     k_phi = roll_gain(vehicle)
     geom, iz_m, notes = axle_geometry(vehicle)
+    axle = np.append(geom, nz.axle_curve_shape)  # the engine's axle vector (A_SHAPE last)
     # axle forces per mass from the force and moment balance (seed 003 eqs 1-2)
     # the causal filter keeps its floor (a time constant from the whole drive's noise would
     # read the future); the smoother's is raised where the drive's noise needs it
@@ -440,7 +441,7 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     cfg[eng.C_ADAPT_MIN] = 1.0 if tyres_carry else nz.adapt_min
     xs, var, var_last, cov_vxvy, nis, counts = eng.run_nodes(
         tn, U, vw_n, *node_inputs, g_node, g_age, gn["gnss_e"], gn["gnss_n"], gn["pstd"],
-        gn["gnss_ve"], gn["gnss_vn"], gn["vstd"], x0, P0, q, f_rows(nx), geom, lever, cfg, smooth,
+        gn["gnss_ve"], gn["gnss_vn"], gn["vstd"], x0, P0, q, f_rows(nx), axle, lever, cfg, smooth,
     )  # fmt: skip
     del U, gn, node_inputs
     # consistency between cues: windowed NIS of the axle and GNSS innovations

@@ -54,6 +54,38 @@ def fiala_force(z: float, c: float, f_max: float) -> tuple[float, float, float, 
     return fy, dfdu * du_dz, dfdu * du_dc, g + dfdu * du_df
 
 
+@numba.njit(cache=True)
+def magic_force(z: float, c: float, f_max: float, shape: float) -> tuple[float, float, float, float]:
+    """Simplified Magic Formula axle force, held at its peak beyond it, and its derivatives.
+
+    ``F_y = F sin(S atan(B z))`` with ``B = c / (S F)`` (so that the slope at zero slip is the
+    cornering stiffness ``c``), ``F = f_max`` and the shape factor ``S`` (> 1; Pacejka 2012,
+    sec. 4.3.2, eq. 4.49 with E = 0; S about 1.3 for lateral forces of passenger-car tyres).
+    Beyond the peak, ``|B z| >= tan(pi / (2 S))``, the force is held at ``F`` (a monotonic
+    curve: the estimator never has two slips for one force).  At moderate utilisation it is
+    more linear than the brush curve (secant at 42 % of the limit: 0.93 against 0.85), as
+    measured tyres are.  Returns ``(F_y, dF_y/dz, dF_y/dc, dF_y/df_max)``.
+    """
+    b = c / (shape * f_max)
+    x = b * z
+    if abs(x) >= math.tan(0.5 * math.pi / shape):
+        s = 1.0 if z >= 0.0 else -1.0
+        return f_max * s, 0.0, 0.0, s
+    th = shape * math.atan(x)
+    sn, cs = math.sin(th), math.cos(th)
+    k = shape * cs / (1.0 + x * x)  # d sin(th) / dx
+    return f_max * sn, f_max * k * b, k * z / shape, sn - k * x
+
+
+@numba.njit(cache=True)
+def axle_lateral_force(z: float, c: float, f_max: float, shape: float) -> tuple[float, float, float, float]:
+    """The estimator's axle curve: :func:`fiala_force` when ``shape <= 0``, else
+    :func:`magic_force` with that shape factor."""
+    if shape <= 0.0:
+        return fiala_force(z, c, f_max)
+    return magic_force(z, c, f_max, shape)
+
+
 def lateral_force(alpha: ArrayLike, c: float, f_max: float) -> FloatArray:
     """Vectorised :func:`fiala_force` over slip angles ``alpha`` (rad): ``F_y`` only."""
     a = np.asarray(alpha, dtype=float)

@@ -33,7 +33,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from sideslip.models.axle_force import fiala_force
+from sideslip.models.axle_force import axle_lateral_force
 from sideslip.models.fused_process import (
     IBG,
     ICX,
@@ -60,8 +60,9 @@ from sideslip.models.fused_process import (
     yaw_rate,
 )
 
-# axle geometry vector: [l_f, l_r, C_f / m, C_r / m, g l_r / L, g l_f / L]
-A_LF, A_LR, A_CF, A_CR, A_NF, A_NR = range(6)
+# axle geometry vector: [l_f, l_r, C_f / m, C_r / m, g l_r / L, g l_f / L, curve shape]
+# (shape <= 0: brush curve, else the simplified Magic Formula's S; models.axle_force)
+A_LF, A_LR, A_CF, A_CR, A_NF, A_NR, A_SHAPE = range(7)
 MU_MIN = 0.05  # friction coefficient floor of the model (ice is about 0.1)
 SCALE_MIN = 0.2  # stiffness scale floor
 
@@ -97,7 +98,7 @@ def rear_axle_force(x: NDArray, u: NDArray, k_phi: float, axle: NDArray, H: NDAr
     z = -(vy - lr * r) / vx
     sr, dsr = _clamped(x[ISR], SCALE_MIN)
     mu, dmu = _clamped(x[IMU], MU_MIN)
-    f, df_dz, df_dc, df_df = fiala_force(z, sr * axle[A_CR], mu * axle[A_NR])
+    f, df_dz, df_dc, df_df = axle_lateral_force(z, sr * axle[A_CR], mu * axle[A_NR], axle[A_SHAPE])
     H[:] = 0.0
     for j in (IBG, ISG, ICY, ICX):
         H[j] = df_dz * lr / vx * dr[j]
@@ -122,7 +123,7 @@ def front_axle_force(
     z = math.tan(alpha)
     sf, dsf = _clamped(x[ISF], SCALE_MIN)
     mu, dmu = _clamped(x[IMU], MU_MIN)
-    f, df_dz, df_dc, df_df = fiala_force(z, sf * axle[A_CF], mu * axle[A_NF])
+    f, df_dz, df_dc, df_df = axle_lateral_force(z, sf * axle[A_CF], mu * axle[A_NF], axle[A_SHAPE])
     cd = math.cos(delta)
     dz_dq = -(1.0 + z * z) / (1.0 + q * q)
     g = cd * df_dz * dz_dq  # d f / d q
