@@ -11,7 +11,10 @@ import pytest
 from sideslip.models import fused_measurements as fm
 from sideslip.models.fused_process import IMU, IPSI, ISF, ISR, ISW, ITAU, IVX, IVY, NX_CORE, NX_GNSS_CAL
 
-AXLE = np.array([1.2, 1.5, 70.0, 80.0, 9.81 * 1.5 / 2.7, 9.81 * 1.2 / 2.7])
+# [l_f, l_r, C_f/m, C_r/m, g l_r/L, g l_f/L, curve shape]: the brush curve, and the same axles
+# with the simplified Magic Formula curve (S = 1.3)
+AXLE = np.array([1.2, 1.5, 70.0, 80.0, 9.81 * 1.5 / 2.7, 9.81 * 1.2 / 2.7, 0.0])
+AXLE_MF = np.array([*AXLE[: fm.A_SHAPE], 1.3])
 LEVER = np.array([0.4, -0.1, 1.2])
 U = np.array([0.25, 0.02, -0.01, 0.3, 5.0, 4.9])
 
@@ -32,6 +35,8 @@ CASES = {
     "standstill_yaw_rate": (fm.standstill_yaw_rate, (U, 0.01)),
     "rear_axle_force": (fm.rear_axle_force, (U, 0.01, AXLE)),
     "front_axle_force": (fm.front_axle_force, (U, 0.05, 0.01, AXLE)),
+    "rear_axle_force_magic": (fm.rear_axle_force, (U, 0.01, AXLE_MF)),
+    "front_axle_force_magic": (fm.front_axle_force, (U, 0.05, 0.01, AXLE_MF)),
     "gnss_velocity": (fm.gnss_velocity, (U, 0.01, LEVER)),
     "gnss_position": (fm.gnss_position, (U, 0.01, LEVER, 0.02)),
 }

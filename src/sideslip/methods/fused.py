@@ -35,11 +35,16 @@ describes, an adaptive factor inflates the axle relations' variance until their 
 innovations average 1 again (time constant ``adapt_tau_s``).
 
 Robustness: every cue but standstill goes through a Huber-type update (variance times
-d2 / gate beyond ``gate_chi2``, :mod:`sideslip.filters.kalman`).  Consistency between cues:
-the windowed NIS of the axle and GNSS innovations (``sideslip.filters.consistency``) flags
-spans where the cues disagree beyond their sigma; there ``beta_std`` grows by the square root
-of the inflation and ``health`` (0 good ... 1 unusable) says so; ``params["health"]`` lists
-the spans.
+d2 / gate beyond ``gate_chi2``, :mod:`sideslip.filters.kalman`).  A per-epoch gate does not
+catch a multipath burst (a run of moderately wrong epochs that agree with each other), so
+each Doppler epoch is also checked against the velocity the accelerometers carried forward
+from the last epoch that agreed with them (``doppler_check``; the tyres play no part in it, so
+a wrong tyre model is not taken for a bad receiver): a disagreeing epoch gets the variance of
+its disagreement, and after a run of them the excess stays for ``doppler_check_tau_s``.
+Consistency between cues: the windowed NIS of the axle and GNSS innovations
+(``sideslip.filters.consistency``) flags spans where the cues disagree beyond their sigma;
+there ``beta_std`` grows by the square root of the inflation and ``health`` (0 good ... 1
+unusable) says so; ``params["health"]`` lists the spans.
 
 Noise the drive sets or the physics sizes (:mod:`sideslip.methods.fused_settings`): the axle
 forces' low-pass is short (its lag is read as tyre slip in every transient: 0.05 s for the

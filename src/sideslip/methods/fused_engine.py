@@ -4,7 +4,8 @@ Nodes are drive rows taken every ``stride`` rows (the smoother's step, e.g. 40 m
 drive; every row for the causal filter).  The prediction from node j to node j+1 uses the mean
 of the IMU samples between them; each node then takes, in order, the wheel-speed (or standstill)
 update, the rear- and front-axle force relations, and every GNSS epoch stamped since the
-previous node (with its age, see :func:`sideslip.models.fused_measurements.gnss_position`).
+previous node (with its age, see :func:`sideslip.models.fused_measurements.gnss_position`;
+each Doppler epoch first checked against the inertial propagation, :func:`_doppler_check`).
 Models: :mod:`sideslip.models.fused_process`, :mod:`sideslip.models.fused_measurements`;
 kernels: :mod:`sideslip.filters.kalman`.
 
@@ -155,26 +156,29 @@ def _doppler_check(chk, t, y_e, y_n, var_g, fy, cfg):
     against the IMU; returns the factor on ``var_g`` (1: taken as the receiver says).
 
     ``chk = [v_e, v_n, variance at anchor, anchor time, suspect variance, its time,
-    consecutive disagreeing epochs, roll gyro angle since the anchor, f_y at the anchor]``.  The
-    anchor is the velocity of the last epoch that agreed with the inertial propagation,
+    consecutive disagreeing epochs, roll gyro angle since the anchor, f_y at the anchor]``.
+
+    The anchor is the velocity of the last epoch that agreed with the inertial propagation,
     carried forward by the process model's own velocity changes (:func:`forward_nodes`), so
-    neither the tyres nor the wheels enter it; its variance grows as a velocity random walk
+    neither the tyres nor the wheels enter it.  Its variance grows as a velocity random walk
     plus an acceleration offset (``C_ACCEL_VRW``, ``C_VCHECK_ACCEL``: accelerometer offset,
-    gravity through roll and bank the model misses) and with gravity through the roll the body
-    turned since the anchor less the suspension roll the model carries (``fy`` the node's
-    low-passed lateral force, ``k_phi fy`` its roll): on a bank ramp the offset state c_y
-    lags the road, and without this term the check would take the GNSS, which is right,
-    for the culprit (banked_turn, 25 deg: a run of 40 epochs rejected).  An epoch outside the chi^2 gate
-    ``C_VCHECK_GATE`` disagrees with the accelerometers, which a multipath burst does and a
-    wrong tyre model does not: its variance grows to cover its distance from the anchor.
-    Multipath persists while the reflecting geometry lasts: after two or more disagreeing
-    epochs in a row (a burst; a lone spike is one epoch's business) their excess stays on
-    the following epochs, fading with ``C_VCHECK_TAU``, so that the tail of a burst, once
-    the anchor's own variance has grown to admit it, is not taken for white noise.  A run of disagreeing
-    epochs ends when the anchor's variance covers it (a wrong anchor cannot hold the filter
-    for long).  Innovation-based detection of GNSS faults against the inertial solution:
-    Groves 2013, *Principles of GNSS, Inertial, and Multisensor Integrated Navigation
-    Systems*, sec. 17.4."""
+    gravity through roll and bank the model misses), and with gravity through the roll the
+    body turned since the anchor less the suspension roll the model carries (``fy`` the
+    node's low-passed lateral force, ``k_phi fy`` its roll): on a bank ramp the offset state
+    c_y lags the road, and without this term the check took the GNSS, which was right, for
+    the culprit (banked_turn, 25 deg: a run of 40 epochs rejected).
+
+    An epoch outside the chi^2 gate ``C_VCHECK_GATE`` disagrees with the accelerometers,
+    which a multipath burst does and a wrong tyre model does not: its variance grows to
+    cover its distance from the anchor.  Multipath persists while the reflecting geometry
+    lasts: after two or more disagreeing epochs in a row (a burst; a lone spike is one
+    epoch's business) their excess stays on the following epochs, fading with
+    ``C_VCHECK_TAU``, so that the tail of a burst, once the anchor's own variance has grown
+    to admit it, is not taken for white noise.  A run of disagreeing epochs ends when the
+    anchor's variance covers it (a wrong anchor cannot hold the filter for long).
+    Innovation-based detection of GNSS faults against the inertial solution: Groves 2013,
+    *Principles of GNSS, Inertial, and Multisensor Integrated Navigation Systems*, sec. 17.4.
+    """
     if cfg[C_VCHECK_ACCEL] <= 0.0:
         return 1.0
     if not math.isfinite(chk[3]):  # the first epoch anchors
@@ -290,7 +294,7 @@ def forward_nodes(
     ng = g_node.size
     t_vel_ok = tn[0]
     t_pos_ok = tn[0]
-    chk = np.array([0.0, 0.0, 0.0, np.nan, 0.0, np.nan, 0.0, 0.0, 0.0])  # the Doppler check (_doppler_check)
+    chk = np.array([0.0, 0.0, 0.0, np.nan, 0.0, np.nan, 0.0, 0.0, 0.0])  # _doppler_check's state
     for k in range(N):
         if k > 0:
             _predict(x, P, U[k - 1], tn[k] - tn[k - 1], cfg, q, rows, xn, Pn, F, dr, qk, tmp)
