@@ -184,3 +184,30 @@ def test_without_gnss_the_smoother_is_not_worse_than_its_filter_on_a_step_steer(
     causal = metrics(drive, run_method("fused_filter", drive, vehicle).series)["beta_rmse_deg"]
     assert smooth <= causal
     assert smooth < 2 * 0.016
+
+
+def test_positions_only_latency_is_used_where_speed_changes_reveal_it() -> None:
+    """urban_course, 20 Hz fixes 0.15 s late (antenna where the file says): without the
+    latency the fixes' along-track offset in every turn reads as slip (measured beta RMSE 0.42
+    deg); with the latency identified from the fixes' speed, 0.032.  Bound 0.1 deg."""
+    from tests.test_gnss_latency import positions_drive
+
+    drive = positions_drive("urban_course", 0.15)
+    vehicle = load_vehicle(drive.meta["vehicle"])
+    est = run_method("fused", drive, vehicle)
+    assert metrics(drive, est.series)["beta_rmse_deg"] < 0.1
+    assert est.params["gnss_latency_s"] == pytest.approx(0.15, abs=0.05)
+    off = run_method("fused", drive, vehicle, settings={"identify_gnss_latency": False})
+    assert metrics(drive, off.series)["beta_rmse_deg"] > 0.3
+
+
+@pytest.mark.parametrize("method", ["fused", "fused_filter"])
+def test_an_unrevealed_latency_widens_beta_std_instead_of_hiding(method: str) -> None:
+    """two_turns_gyro_sf at constant speed with fixes 0.15 s late: no speed change reveals the
+    latency and in the turns it is the same as slip, so beta is off (measured 0.73 deg); its
+    sigma carries r times the latency's prior sigma (before: 64 % inside 2 sigma)."""
+    from tests.test_gnss_latency import positions_drive
+
+    drive = positions_drive("two_turns_gyro_sf", 0.15)
+    est = run_method(method, drive, load_vehicle(drive.meta["vehicle"]))
+    assert two_sigma_share(drive, est) >= 0.9

@@ -82,6 +82,7 @@ from sideslip import gnss
 from sideslip.drive import LONG_DRIVE_ROWS, Drive
 from sideslip.estimate import Estimate
 from sideslip.filters.consistency import nis_consistency
+from sideslip.gnss_latency import identify_latency
 from sideslip.methods import fused_engine as eng
 from sideslip.methods.fused_settings import FusedSettings, force_noise_variance, force_time_constant
 from sideslip.methods.registry import SPEED, register
@@ -360,6 +361,24 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
                 f"not identified: position noise of {nz.latency_prior_sigma_s:g} s x speed and "
                 f"{nz.lever_prior_sigma_m:g} m (FusedSettings.identify_gnss_calibration)"
             )
+    # the receiver's latency from the fixes' speed against the wheels (tyre-free:
+    # sideslip.gnss_latency): each fix is taken at its stamp less the latency the estimate and
+    # the prior N(0, latency_prior_sigma_s) give together (0 where the drive does not inform
+    # it); the position noise keeps the prior's v x latency_prior_sigma_s, which also covers
+    # an antenna the file misplaces along x (on an arc the same as a latency of -l_x / v).
+    # Measured over 20 Hz fixes 0-0.15 s late with the antenna -0.5 / 0 / +0.5 m off
+    # (benchmarks/results/gnss_latency.md): mean beta RMSE 0.252 -> 0.174 deg
+    # (off-line only: the whole drive's speed would read the future in the causal filter)
+    latency = None
+    if smooth and has_pos and not has_vel and not calibrate and nz.identify_gnss_latency:
+        latency = identify_latency(drive)
+        if latency is not None:
+            notes["gnss_latency_lever"] = (
+                f"latency {latency.latency_s:.3f} +- {latency.sigma_s:.3f} s from the fixes' speed "
+                f"against the wheels, used as {latency.posterior_mean(nz.latency_prior_sigma_s):.3f} s "
+                f"(with the prior 0 +- {nz.latency_prior_sigma_s:g} s); lever arm not identified: "
+                f"{nz.lever_prior_sigma_m:g} m and {nz.latency_prior_sigma_s:g} s x speed of position noise"
+            )
     lp = _zero_phase_low_pass if tyres_only else _low_pass
     fy_lp = lp(t, ay * (1.0 - G * k_phi), tau_f)
     r_dot = _backward_rate(t, wz)
@@ -408,7 +427,11 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     del road_roll
     vw_n = vw[idx] if stride == 1 else _window_mean(vw, idx)
     g_node = np.searchsorted(idx, g_rows, side="left").astype(np.int64)
-    g_age = tn[g_node] - t[g_rows]
+    tau_fix, tau_sigma = 0.0, nz.latency_prior_sigma_s  # the latency fixes are taken with, s
+    if latency is not None:
+        tau_fix = latency.posterior_mean(nz.latency_prior_sigma_s)
+        tau_sigma = latency.posterior_sigma(nz.latency_prior_sigma_s)
+    g_age = tn[g_node] - t[g_rows] + tau_fix
     x0, P0 = _initial_state(drive, vw, nx, nz)
     q = _process_psd(nx, nz)
     if not (has_pos or has_vel):
@@ -507,7 +530,24 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
         drive, vehicle, smooth, nz, rows, (j, w, aux_nodes), node_params, k_phi, fy_lp, wz, wy,
         has_pos, has_vel, use_front, tyres_carry,
     )  # fmt: skip
-    return Estimate(est.method, est.t, est.series, est.params, _innovations(n, idx, nis))
+    params = dict(est.params)
+    series = dict(est.series)
+    if has_pos and not has_vel and not calibrate:
+        # an unknown latency turns the fixes' course by r tau through a whole turn: an error
+        # correlated over the turn that the fixes' white position noise does not carry, and
+        # that the stiffness learned in its transients takes along into the arc (two 180 deg
+        # turns at constant speed, fixes 0.15 s late, which no speed change reveals: beta RMSE
+        # 0.73 deg with 64 % inside 2 sigma).  beta_std carries r times the latency's
+        # remaining 1-sigma (the prior's, or with the identification's)
+        series["beta_std"] = np.hypot(est["beta_std"], np.abs(est["r"]) * tau_sigma)
+    if latency is not None:
+        params.update(
+            gnss_latency_s=latency.posterior_mean(nz.latency_prior_sigma_s),
+            gnss_latency_identified_s=latency.latency_s,
+            gnss_latency_identified_s_sigma=latency.sigma_s,
+            gnss_latency_source="fixes' speed against the wheels (sideslip.gnss_latency), with the prior",
+        )
+    return Estimate(est.method, est.t, series, params, _innovations(n, idx, nis))
 
 
 INNOVATION_CHANNELS = (

@@ -113,6 +113,15 @@ class FusedSettings:
     # at 1 there too); fused_filter 0.255 -> 0.109 and 0.273 -> 0.218
     positions_only_tyres: bool = True
     identify_gnss_calibration: bool = False  # latency and lever arm as states (positions only)
+    # positions only: the receiver's latency from the fixes' speed against the wheels
+    # (sideslip.gnss_latency; tyre-free, so slip cannot pass for delay), combined with the
+    # prior N(0, latency_prior_sigma_s); the prior's noise stays on the positions.  The
+    # smoother only (it reads the whole drive).  Measured (benchmarks/results/gnss_latency.md,
+    # 20 Hz fixes 0 / 0.05 / 0.15 s late, antenna -0.5 / 0 / +0.5 m off): mean beta RMSE
+    # 0.252 -> 0.150 deg; where an antenna ahead cancels the lateness (issue 15's receiver:
+    # 50 ms late, 0.5 m ahead, i.e. no offset at 10 m/s) it costs: positions-only suite
+    # 0.081 -> 0.090 (right file), 0.124 -> 0.121 (soft)
+    identify_gnss_latency: bool = True
     health_window_s: float = 2.0  # s: window of the consistency test
     # the axle curve of the tyre relations (models.axle_force): 0, the brush (Fiala) curve; a
     # value > 1, the simplified Magic Formula with that shape factor (1.3: Pacejka's typical

@@ -1,0 +1,56 @@
+"""The receiver latency from the fixes' speed against the wheels (sideslip.gnss_latency),
+graded on the simulator's receiver, whose latency is known (fixes report the truth that long
+before their stamp) and whose tyres, slip and speed control are not the estimator's model."""
+
+from __future__ import annotations
+
+import functools
+
+import pytest
+
+from sideslip.gnss_latency import LatencyEstimate, identify_latency
+from sideslip.simulate import SensorConfig, simulate
+from sideslip.simulate.run import _lookup
+from tests.conftest import sim_drive
+
+
+@functools.lru_cache(maxsize=8)
+def positions_drive(name: str, latency_s: float, lever_x: float = 0.0) -> object:
+    """``name`` with a 20 Hz receiver without Doppler, ``latency_s`` late, its antenna
+    ``lever_x`` ahead of where the vehicle file says."""
+    receiver = {"gnss_rate_hz": 20.0, "gnss_doppler": False, "gnss_latency_s": latency_s,
+                "gnss_lever_offset_x": lever_x}  # fmt: skip
+    config = SensorConfig().with_overrides(_lookup(name).sensor_overrides).with_overrides(receiver)
+    return simulate(name, seed=0, config=config)
+
+
+@pytest.mark.parametrize("latency_s", [0.05, 0.15])
+def test_latency_is_found_where_the_car_speeds_up_and_slows_down(latency_s: float) -> None:
+    """urban_course (stops and starts): measured 0.061 / 0.162 s with a 1-sigma of 0.04 s for
+    the true 0.05 / 0.15 s; the bound asks for 2.5 sigma, and the wheel scale within 1 %."""
+    found = identify_latency(positions_drive("urban_course", latency_s))
+    assert found is not None
+    assert abs(found.latency_s - latency_s) < 2.5 * found.sigma_s
+    assert found.sigma_s < 0.06
+    assert found.wheel_scale == pytest.approx(1.0, abs=0.01)
+
+
+def test_a_constant_speed_drive_does_not_inform_the_latency() -> None:
+    """two_turns_gyro_sf (72 km/h throughout): the fixes' speed never leads or lags the wheels,
+    so the estimate's sigma is seconds and, with the prior N(0, 0.1 s), nothing moves."""
+    found = identify_latency(positions_drive("two_turns_gyro_sf", 0.15))
+    assert found is not None and found.sigma_s > 1.0
+    assert abs(found.posterior_mean(0.1)) < 0.001
+    assert found.posterior_sigma(0.1) == pytest.approx(0.1, rel=0.01)
+
+
+def test_no_estimate_without_fast_fixes() -> None:
+    assert identify_latency(sim_drive("demo", 0)) is None  # Doppler: its epochs are not timed here
+    assert identify_latency(positions_drive("suburban_outages", 0.05).slice(0, 50)) is None
+
+
+def test_posterior_combines_the_estimate_with_the_prior() -> None:
+    est = LatencyEstimate(latency_s=0.2, sigma_s=0.1, wheel_scale=1.0, fixes=500)
+    assert est.posterior_mean(0.1) == pytest.approx(0.1)  # equal weights
+    assert est.posterior_sigma(0.1) == pytest.approx(0.1 / 2**0.5)
+    assert LatencyEstimate(2.0, 0.01, 1.0, 500).posterior_mean(0.1) == 0.5  # held in range
