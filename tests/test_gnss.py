@@ -159,3 +159,21 @@ def test_course_from_fixes_spans_ten_metres_and_resists_a_repeated_first_fix() -
     assert course == pytest.approx(0.4, abs=0.01)
     assert t_b - t_a == pytest.approx(0.6)  # 12 m at 20 m/s: the first fix beyond 10 m
     assert gnss.course_from_fixes(_drive(doppler=False, n=2)) is None
+
+
+def test_course_from_fixes_waits_for_the_wheels_to_move() -> None:
+    """A car standing for 5 s with multipath fixes 9-12 m off (urban_course with 5 % multipath
+    once gave a course 174 deg wrong this way), then driving off at 10 m/s along 0.4 rad: only a
+    baseline the wheels confirm counts."""
+    t = np.arange(0.0, 15.0, 0.05)
+    moving = t >= 5.0
+    speed = np.where(moving, 10.0, 0.0)
+    travelled = np.where(moving, 10.0 * (t - 5.0), 0.0)
+    e, n = travelled * math.cos(0.4), travelled * math.sin(0.4)
+    for k, (de, dn) in zip((12, 40, 77), ((-9.0, 3.0), (2.0, -11.0), (-8.0, -8.0)), strict=True):
+        e[k] += de
+        n[k] += dn
+    cols = {"t": t, "v_rl": speed, "v_rr": speed, "gnss_e": e, "gnss_n": n}
+    course, t_a, _ = gnss.course_from_fixes(drive_from_columns(cols, {}))
+    assert course == pytest.approx(0.4, abs=0.01)
+    assert t_a >= 4.9
