@@ -36,7 +36,7 @@ from numpy.typing import NDArray
 
 from sideslip.drive import Drive
 from sideslip.frames import wrap_angle
-from sideslip.signals import hold
+from sideslip.signals import hold, speed_source, vehicle_speed
 from sideslip.vehicle import Vehicle
 
 FloatArray = NDArray[np.float64]
@@ -188,8 +188,6 @@ def course_from_fixes(
     ok = np.flatnonzero(np.isfinite(column(drive, "gnss_e")) & np.isfinite(column(drive, "gnss_n")))
     if ok.size < 3:
         return None
-    from sideslip.signals import speed_source, vehicle_speed  # signals imports nothing of ours
-
     e, n, tf = drive["gnss_e"][ok], drive["gnss_n"][ok], drive.t[ok]
     odometer = None
     if speed_source(drive) in ("wheels", "v_can"):
