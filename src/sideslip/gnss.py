@@ -50,6 +50,11 @@ COURSE_SIGMA_MAX_RAD = math.radians(5.0)  # poorer course samples are not used
 CONSECUTIVE_MAX_HZ = 1.5  # fixes at this rate or slower: velocity from consecutive fixes
 DIFFERENCE_BASELINE_S = 1.0  # faster fixes: velocity over this baseline, centred
 COURSE_MIN_SPEED_M_S = 3.0  # default speed gate of the course
+JUMP_WINDOW_S = 0.3  # a fast receiver's fix is checked against its neighbours this far each side
+JUMP_SIGMAS = 6.0  # ... and dropped beyond this many robust scales of the drive's own residuals
+JUMP_FLOOR_M = 0.5  # ... and never for less than this (smooth receivers have cm-level scatter)
+SPEED_AGREE_SIGMAS = 4.0  # a course sample's GNSS speed within this many velocity sigmas ...
+SPEED_AGREE_FRACTION = 0.15  # ... plus this share of the wheels' speed (scale, slip) of it
 
 
 def column(drive: Drive, name: str) -> FloatArray:
@@ -107,6 +112,7 @@ class VelocitySamples:
     vn: FloatArray
     sigma: FloatArray  # m/s per axis
     source: str
+    baseline_s: float = 0.0  # > 0: centred over this baseline, neighbouring samples overlap
 
     @property
     def speed(self) -> FloatArray:
@@ -130,7 +136,8 @@ def velocity_samples(
     faster ones over :data:`DIFFERENCE_BASELINE_S` centred on the fix (the fixes nearest
     half a baseline before and after, where no gap lies between), since over one 50 ms step
     of a 20 Hz receiver the white noise alone turns the course by tens of degrees, and a
-    baseline ending at the fix would lag the course by half the baseline in every turn.
+    baseline ending at the fix would lag the course by half the baseline in every turn.  A fast
+    receiver's fixes that jump off their neighbours (:func:`jumped_fixes`) are left out first.
     """
     empty = VelocitySamples(np.zeros(0, dtype=np.intp), np.zeros(0), np.zeros(0), np.zeros(0), "")
     if "gnss_ve" in drive and "gnss_vn" in drive:
@@ -144,6 +151,12 @@ def velocity_samples(
     if pos.rows.size < 2:
         return empty
     tf = drive.t[pos.rows]
+    if np.median(np.diff(tf)) < 1.0 / CONSECUTIVE_MAX_HZ:
+        good = ~jumped_fixes(tf, pos.e, pos.n)
+        pos = PositionSamples(pos.rows[good], pos.e[good], pos.n[good], pos.sigma[good])
+        tf = tf[good]
+        if tf.size < 2:
+            return empty
     if np.median(np.diff(tf)) >= 1.0 / CONSECUTIVE_MAX_HZ:
         dt = np.diff(tf)
         ve = np.diff(pos.e) / dt
@@ -164,7 +177,59 @@ def velocity_samples(
     ve = (pos.e[b] - pos.e[a]) / dt
     vn = (pos.n[b] - pos.n[a]) / dt
     sig = math.sqrt(2.0) * POS_WHITE_FRACTION * np.maximum(pos.sigma[a], pos.sigma[b]) / dt
-    return VelocitySamples(pos.rows[k], ve, vn, sig, "positions")
+    return VelocitySamples(pos.rows[k], ve, vn, sig, "positions", DIFFERENCE_BASELINE_S)
+
+
+def jumped_fixes(tf: FloatArray, e: FloatArray, n: FloatArray) -> NDArray[np.bool_]:
+    """Isolated multipath fixes of a fast receiver (True where a fix jumps off its neighbours).
+
+    Each fix is predicted from the fixes within :data:`JUMP_WINDOW_S` on either side, moved to
+    its time with the median of their consecutive velocities (an isolated jump spoils two of
+    those differences, the median ignores them), and the prediction is the median over those
+    neighbours.  The miss is scored against the drive's own scatter: fixes beyond
+    :data:`JUMP_SIGMAS` robust scales (1.4826 MAD of all misses; at least :data:`JUMP_FLOOR_M`)
+    are flagged.  Curvature inside the window costs 0.5 a tau^2, under 0.2 m at 1 g.  Too few
+    neighbours (a slow receiver, edges of a gap) flag nothing.
+    """
+    m = tf.size
+    flagged = np.zeros(m, dtype=bool)
+    if m < 5:
+        return flagged
+    step = float(np.median(np.diff(tf)))
+    w = round(JUMP_WINDOW_S / step) if step > 0 else 0
+    if w < 2 or m < 2 * w + 1:
+        return flagged
+    dt = np.diff(tf)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        v_e = np.where(dt > 0, np.diff(e) / dt, np.nan)
+        v_n = np.where(dt > 0, np.diff(n) / dt, np.nan)
+    pad = np.full(w, np.nan)
+    # consecutive velocities k-w .. k+w-1 around fix k (2w of them)
+    win_ve = np.lib.stride_tricks.sliding_window_view(np.concatenate([pad, v_e, pad]), 2 * w)
+    win_vn = np.lib.stride_tricks.sliding_window_view(np.concatenate([pad, v_n, pad]), 2 * w)
+    ve_k = np.nanmedian(win_ve[:m], axis=1)
+    vn_k = np.nanmedian(win_vn[:m], axis=1)
+    offsets = np.r_[np.arange(-w, 0), np.arange(1, w + 1)]
+    idx = np.arange(m)[:, None] + offsets[None, :]
+    inside = (idx >= 0) & (idx < m)
+    j = np.clip(idx, 0, m - 1)
+    near = inside & (np.abs(tf[j] - tf[:, None]) <= JUMP_WINDOW_S + 0.5 * step)
+    lag = tf[:, None] - tf[j]
+    pred_e = np.where(near, e[j] + ve_k[:, None] * lag, np.nan)
+    pred_n = np.where(near, n[j] + vn_k[:, None] * lag, np.nan)
+    enough = near.sum(axis=1) >= w
+    if not enough.any():
+        return flagged
+    with np.errstate(invalid="ignore"):
+        miss = np.hypot(e - np.nanmedian(np.where(enough[:, None], pred_e, 0.0), axis=1),
+                        n - np.nanmedian(np.where(enough[:, None], pred_n, 0.0), axis=1))  # fmt: skip
+    ok = enough & np.isfinite(miss)
+    if ok.sum() < 5:
+        return flagged
+    scale = 1.4826 * float(np.median(np.abs(miss[ok] - np.median(miss[ok]))))
+    limit = max(float(np.median(miss[ok])) + JUMP_SIGMAS * scale, JUMP_FLOOR_M)
+    flagged[ok] = miss[ok] > limit
+    return flagged
 
 
 BASELINE_COURSE_M = 10.0  # travel over which a course from fixes is taken (initial heading)
@@ -230,6 +295,7 @@ class CourseSamples:
     speed: FloatArray
     sigma: FloatArray
     reversing: NDArray[np.bool_]
+    baseline_s: float = 0.0  # > 0: each sample spans this baseline and overlaps its neighbours
 
 
 def course_sigma(vel_sigma: FloatArray, speed: FloatArray) -> FloatArray:
@@ -249,23 +315,32 @@ def course_samples(
     ``signed_speed`` (per row, e.g. signed wheel speeds): where given, a sample is used only
     when ``|signed_speed|`` also exceeds the gate (the vehicle's own speed confirms the GNSS
     speed), and its course is turned by pi where ``signed_speed < 0`` (reversing), so that
-    course = yaw + beta holds.  Without Doppler velocity the course comes from differenced
-    positions (``use_positions``).
+    course = yaw + beta holds; its 1-sigma is then sigma_v / |signed_speed|, and a sample whose
+    GNSS speed disagrees with it by more than :data:`SPEED_AGREE_SIGMAS` velocity sigmas plus
+    :data:`SPEED_AGREE_FRACTION` of it is dropped.  Dividing by the GNSS speed instead selects
+    the outliers at low speed: a multipath fix in a 1 s baseline adds metres per second to the
+    speed, which shrinks that sample's sigma under the ``max_sigma`` gate while the honest
+    samples beside it stay above (a positions-only 20 Hz drive pulling off at 4 m/s kept only
+    its multipath samples, 154 deg off with a 3 deg sigma, and turned ``mkf``'s yaw by 150 deg).
+    Without Doppler velocity the course comes from differenced positions (``use_positions``).
     """
     vel = velocity_samples(drive, use_positions)
     speed = vel.speed
     keep = np.isfinite(speed) & (speed > min_speed)
     rev = np.zeros(vel.rows.size, dtype=bool)
+    sig_speed = speed
     if signed_speed is not None:
         s = np.asarray(signed_speed, dtype=float)[vel.rows]
         keep &= np.abs(s) > min_speed
+        keep &= np.abs(speed - np.abs(s)) <= SPEED_AGREE_SIGMAS * vel.sigma + SPEED_AGREE_FRACTION * np.abs(s)
         rev = s < 0.0
-    sig = course_sigma(vel.sigma, speed)
+        sig_speed = np.abs(s)
+    sig = course_sigma(vel.sigma, sig_speed)
     keep &= sig <= max_sigma
     course = np.arctan2(vel.vn[keep], vel.ve[keep])
     rev = rev[keep]
     course = np.where(rev, wrap_angle(course + np.pi), course)
-    return CourseSamples(vel.rows[keep], course, speed[keep], sig[keep], rev)
+    return CourseSamples(vel.rows[keep], course, speed[keep], sig[keep], rev, vel.baseline_s)
 
 
 @dataclass(frozen=True)
