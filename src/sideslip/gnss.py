@@ -147,16 +147,10 @@ def velocity_samples(
         return VelocitySamples(rows, ve[rows], vn[rows], sig, "doppler")
     if not use_positions or "gnss_e" not in drive or "gnss_n" not in drive:
         return empty
-    pos = position_samples(drive)
+    pos = position_samples(drive, drop_jumps=True)
     if pos.rows.size < 2:
         return empty
     tf = drive.t[pos.rows]
-    if np.median(np.diff(tf)) < 1.0 / CONSECUTIVE_MAX_HZ:
-        good = ~jumped_fixes(tf, pos.e, pos.n)
-        pos = PositionSamples(pos.rows[good], pos.e[good], pos.n[good], pos.sigma[good])
-        tf = tf[good]
-        if tf.size < 2:
-            return empty
     if np.median(np.diff(tf)) >= 1.0 / CONSECUTIVE_MAX_HZ:
         dt = np.diff(tf)
         ve = np.diff(pos.e) / dt
@@ -374,12 +368,19 @@ class PositionSamples:
 
 
 def position_samples(
-    drive: Drive, default_sigma_m: float = POS_SIGMA_DEFAULT_M, floor_sigma_m: float = 0.0
+    drive: Drive,
+    default_sigma_m: float = POS_SIGMA_DEFAULT_M,
+    floor_sigma_m: float = 0.0,
+    drop_jumps: bool = False,
 ) -> PositionSamples:
     """GNSS position fixes with ``gnss_pos_std`` (``default_sigma_m`` where the drive gives
-    none, at least ``floor_sigma_m``)."""
+    none, at least ``floor_sigma_m``); ``drop_jumps``: without a fast receiver's fixes that
+    jump off their neighbours (:func:`jumped_fixes`; fixes slower than
+    :data:`CONSECUTIVE_MAX_HZ` are kept as they are)."""
     e, n = column(drive, "gnss_e"), column(drive, "gnss_n")
     rows = np.flatnonzero(np.isfinite(e) & np.isfinite(n))
+    if drop_jumps and rows.size > 1 and np.median(np.diff(drive.t[rows])) < 1.0 / CONSECUTIVE_MAX_HZ:
+        rows = rows[~jumped_fixes(drive.t[rows], e[rows], n[rows])]
     sig = _sigma_or_default(column(drive, "gnss_pos_std")[rows], default_sigma_m, floor_sigma_m)
     return PositionSamples(rows, e[rows], n[rows], sig)
 
