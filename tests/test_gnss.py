@@ -210,8 +210,8 @@ def test_jumped_fixes_finds_multipath_jumps_and_spares_a_smooth_turn_at_one_g() 
 
 def test_positions_only_course_keeps_no_multipath_sample_at_pull_off() -> None:
     # The simulator's nonlinear drive (demo: a stop and pull-off) with 20 Hz positions, no
-    # Doppler and multipath on 5 % of the epochs.  Before the jump check and the wheels' speed
-    # in the course sigma, 7-8 % of the samples were beyond 5 sigma (30-50 % of those under
+    # Doppler and multipath on 5 % of the epochs.  Before the jump check and the speed agreement
+    # with the wheels, 7-8 % of the samples were beyond 5 sigma (30-50 % of those under
     # 8 m/s, up to 165 deg off): multipath adds speed, which shrank their sigma under the gate.
     from sideslip.signals import vehicle_speed
     from sideslip.simulate import SensorConfig, simulate

@@ -112,7 +112,6 @@ class VelocitySamples:
     vn: FloatArray
     sigma: FloatArray  # m/s per axis
     source: str
-    baseline_s: float = 0.0  # > 0: centred over this baseline, neighbouring samples overlap
 
     @property
     def speed(self) -> FloatArray:
@@ -171,7 +170,7 @@ def velocity_samples(
     ve = (pos.e[b] - pos.e[a]) / dt
     vn = (pos.n[b] - pos.n[a]) / dt
     sig = math.sqrt(2.0) * POS_WHITE_FRACTION * np.maximum(pos.sigma[a], pos.sigma[b]) / dt
-    return VelocitySamples(pos.rows[k], ve, vn, sig, "positions", DIFFERENCE_BASELINE_S)
+    return VelocitySamples(pos.rows[k], ve, vn, sig, "positions")
 
 
 def jumped_fixes(tf: FloatArray, e: FloatArray, n: FloatArray) -> NDArray[np.bool_]:
@@ -289,7 +288,6 @@ class CourseSamples:
     speed: FloatArray
     sigma: FloatArray
     reversing: NDArray[np.bool_]
-    baseline_s: float = 0.0  # > 0: each sample spans this baseline and overlaps its neighbours
 
 
 def course_sigma(vel_sigma: FloatArray, speed: FloatArray) -> FloatArray:
@@ -309,32 +307,30 @@ def course_samples(
     ``signed_speed`` (per row, e.g. signed wheel speeds): where given, a sample is used only
     when ``|signed_speed|`` also exceeds the gate (the vehicle's own speed confirms the GNSS
     speed), and its course is turned by pi where ``signed_speed < 0`` (reversing), so that
-    course = yaw + beta holds; its 1-sigma is then sigma_v / |signed_speed|, and a sample whose
-    GNSS speed disagrees with it by more than :data:`SPEED_AGREE_SIGMAS` velocity sigmas plus
-    :data:`SPEED_AGREE_FRACTION` of it is dropped.  Dividing by the GNSS speed instead selects
-    the outliers at low speed: a multipath fix in a 1 s baseline adds metres per second to the
-    speed, which shrinks that sample's sigma under the ``max_sigma`` gate while the honest
-    samples beside it stay above (a positions-only 20 Hz drive pulling off at 4 m/s kept only
-    its multipath samples, 154 deg off with a 3 deg sigma, and turned ``mkf``'s yaw by 150 deg).
+    course = yaw + beta holds, and a sample whose GNSS speed disagrees with it by more than
+    :data:`SPEED_AGREE_SIGMAS` velocity sigmas plus :data:`SPEED_AGREE_FRACTION` of it is
+    dropped.  The course sigma divides by the GNSS speed, so a multipath error that adds speed
+    shrinks its own sigma: at low speed, where the honest samples stay above ``max_sigma``,
+    only such outliers passed (a positions-only 20 Hz drive pulling off at 4 m/s kept its
+    multipath samples, 154 deg off with a 3 deg sigma, and turned ``mkf``'s yaw by 150 deg);
+    the agreement check and the jump check of the fixes (:func:`jumped_fixes`) remove them.
     Without Doppler velocity the course comes from differenced positions (``use_positions``).
     """
     vel = velocity_samples(drive, use_positions)
     speed = vel.speed
     keep = np.isfinite(speed) & (speed > min_speed)
     rev = np.zeros(vel.rows.size, dtype=bool)
-    sig_speed = speed
     if signed_speed is not None:
         s = np.asarray(signed_speed, dtype=float)[vel.rows]
         keep &= np.abs(s) > min_speed
         keep &= np.abs(speed - np.abs(s)) <= SPEED_AGREE_SIGMAS * vel.sigma + SPEED_AGREE_FRACTION * np.abs(s)
         rev = s < 0.0
-        sig_speed = np.abs(s)
-    sig = course_sigma(vel.sigma, sig_speed)
+    sig = course_sigma(vel.sigma, speed)
     keep &= sig <= max_sigma
     course = np.arctan2(vel.vn[keep], vel.ve[keep])
     rev = rev[keep]
     course = np.where(rev, wrap_angle(course + np.pi), course)
-    return CourseSamples(vel.rows[keep], course, speed[keep], sig[keep], rev, vel.baseline_s)
+    return CourseSamples(vel.rows[keep], course, speed[keep], sig[keep], rev)
 
 
 @dataclass(frozen=True)

@@ -62,7 +62,10 @@ cross-covariances kept, its gain zero).  ``beta_std`` adds what
 the covariance's white updates cannot carry: the learned stiffness's remaining relative
 uncertainty times the rear slip, the tyres' relaxation lag, and, where nothing but the tyres
 pins the slip (no GNSS; and for the causal filter in every corner, where GNSS cannot tell
-slip from a gyro scale error before the turn is complete), the relation's relative error.
+slip from a gyro scale error before the turn is complete), the relation's relative error;
+with GNSS positions but no Doppler, the change of beta when the whole estimator runs again
+with the fixes one latency sigma later (a latency turns the fixes' course by r tau in every
+turn, and how much of that reaches beta depends on how far the tyres carry the slip there).
 
 Discretisation and cost: the smoother steps on nodes every ``step_s`` (inputs averaged in
 between, states linearly interpolated back to every row); the filter steps on every row.
@@ -467,11 +470,27 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     # gives v_y independently of the tyres (FusedSettings.adapt_min): not where the tyres
     # carry the slip (no GNSS; positions alone, whose arcs agree with any slip the tyres say)
     cfg[eng.C_ADAPT_MIN] = 1.0 if tyres_carry else nz.adapt_min
-    xs, var, var_last, cov_vxvy, nis, counts = eng.run_nodes(
-        tn, U, vw_n, *node_inputs, g_node, g_age, gn["gnss_e"], gn["gnss_n"], gn["pstd"],
-        gn["gnss_ve"], gn["gnss_vn"], gn["vstd"], x0, P0, q, f_rows(nx), axle, lever, cfg, smooth,
-    )  # fmt: skip
-    del U, gn, node_inputs
+    before = (tn, U, vw_n, *node_inputs, g_node)
+    after = (gn["gnss_e"], gn["gnss_n"], gn["pstd"], gn["gnss_ve"], gn["gnss_vn"], gn["vstd"],
+             x0, P0, q, f_rows(nx), axle, lever, cfg, smooth)  # fmt: skip
+    xs, var, var_last, cov_vxvy, nis, counts = eng.run_nodes(*before, g_age, *after)
+    latency_beta = None  # |d beta| at the nodes for a latency one sigma later (positions only)
+    if has_pos and not has_vel and not calibrate:
+        # an unknown latency turns the fixes' course by r tau through a turn: an error
+        # correlated over the turn that the fixes' white position noise does not carry, and
+        # that the stiffness learned in the transients takes along into the arc.  How much of
+        # it reaches beta depends on how far the estimate follows the fixes there (in a steady
+        # turn the tyres may carry the slip, in a transient the fixes), so the whole estimator
+        # is run again with the fixes taken one latency sigma later and the change of beta is
+        # that part of beta_std (first-order propagation through the estimator; one more
+        # pass, on positions-only drives only)
+        xs_late = eng.run_nodes(*before, g_age + tau_sigma, *after)[0]
+        latency_beta = np.abs(
+            np.arctan2(xs_late[:, IVY], np.abs(xs_late[:, IVX]) + 1e-3)
+            - np.arctan2(xs[:, IVY], np.abs(xs[:, IVX]) + 1e-3)
+        )
+        del xs_late
+    del U, gn, node_inputs, before, after
     # consistency between cues: windowed NIS of the axle and GNSS innovations
     chan = nis[:, [eng.K_REAR, eng.K_FRONT, eng.K_GNSS_VEL, eng.K_GNSS_POS]]
     dof_per = np.array([1.0, 1.0, 2.0, 2.0])
@@ -532,14 +551,10 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     )  # fmt: skip
     params = dict(est.params)
     series = dict(est.series)
-    if has_pos and not has_vel and not calibrate:
-        # an unknown latency turns the fixes' course by r tau through a whole turn: an error
-        # correlated over the turn that the fixes' white position noise does not carry, and
-        # that the stiffness learned in its transients takes along into the arc (two 180 deg
-        # turns at constant speed, fixes 0.15 s late, which no speed change reveals: beta RMSE
-        # 0.73 deg with 64 % inside 2 sigma).  beta_std carries r times the latency's
-        # remaining 1-sigma (the prior's, or with the identification's)
-        series["beta_std"] = np.hypot(est["beta_std"], np.abs(est["r"]) * tau_sigma)
+    if latency_beta is not None:
+        # the latency's part of beta_std (above), on the rows as the nodes are
+        lat_rows = eng.interp_rows(j, w, latency_beta[None, :])[0] if smooth else latency_beta[j]
+        series["beta_std"] = np.hypot(est["beta_std"], lat_rows)
     if latency is not None:
         params.update(
             gnss_latency_s=latency.posterior_mean(nz.latency_prior_sigma_s),
