@@ -85,6 +85,23 @@ def test_multipath_bursts_at_the_grip_limit_do_not_make_fused_confidently_wrong(
     assert rmse < min(others.values()), others
 
 
+def test_the_doppler_check_does_not_blame_the_receiver_for_a_bank_ramp():
+    """banked_turn seed 2 (bank 0 -> 25 deg in 3 s, then a 150 m turn): the offset state c_y
+    lags the ramp, the inertial propagation from an anchor taken during the ramp drifts, and
+    the check rejected 17 right Doppler epochs in a row and kept them suspect for 5 s; the
+    tyres, with a stiffness learned at 0.32 of the file's, carried the slip: beta RMSE 0.290
+    deg, 67 % inside 2 sigma.  The check now also allows for the bank change of the last 2 s
+    (roll gyro less the suspension's roll, beyond 2 deg of suspension-model slack): 0.020 deg,
+    100 %; seeds 0-5 all under 0.035.  Bounds: 0.06 deg (3x the measured), issue 15's 2 sigma
+    share, and the check itself left on."""
+    drive = sim_drive("banked_turn", 2)
+    vehicle = load_vehicle(drive.meta["vehicle"])
+    est = run_method("fused", drive, vehicle)
+    assert est.params["settings"]["doppler_check"] is True
+    assert metrics(drive, est.series)["beta_rmse_deg"] < 0.06
+    assert two_sigma_share(drive, est) >= 0.90
+
+
 @pytest.mark.parametrize("scenario", ["dlc_bank", "banked_turn", "race_lap"])
 def test_fused_beats_every_paper_method_on_banks_and_at_the_limit(scenario):
     """Where bank and tyre saturation defeat the linear models, the fused smoother is the best

@@ -189,7 +189,8 @@ def test_without_gnss_the_smoother_is_not_worse_than_its_filter_on_a_step_steer(
 def test_positions_only_latency_is_used_where_speed_changes_reveal_it() -> None:
     """urban_course, 20 Hz fixes 0.15 s late (antenna where the file says): without the
     latency the fixes' along-track offset in every turn reads as slip (measured beta RMSE 0.42
-    deg); with the latency identified from the fixes' speed, 0.032.  Bound 0.1 deg."""
+    deg; 0.28 since that offset counts as correlated over a second of fixes); with the latency
+    identified from the fixes' speed, 0.032.  Bounds: 0.1 deg, and without it at least 3x."""
     from tests.test_gnss_latency import positions_drive
 
     drive = positions_drive("urban_course", 0.15)
@@ -198,7 +199,8 @@ def test_positions_only_latency_is_used_where_speed_changes_reveal_it() -> None:
     assert metrics(drive, est.series)["beta_rmse_deg"] < 0.1
     assert est.params["gnss_latency_s"] == pytest.approx(0.15, abs=0.05)
     off = run_method("fused", drive, vehicle, settings={"identify_gnss_latency": False})
-    assert metrics(drive, off.series)["beta_rmse_deg"] > 0.3
+    on_rmse = metrics(drive, est.series)["beta_rmse_deg"]
+    assert metrics(drive, off.series)["beta_rmse_deg"] > 3.0 * on_rmse
 
 
 @pytest.mark.parametrize("method", ["fused", "fused_filter"])
@@ -229,4 +231,18 @@ def test_the_latency_part_of_beta_std_is_what_the_latency_changes_not_r_times_it
     est = run_method(method, drive, load_vehicle(drive.meta["vehicle"]))
     moving = np.hypot(drive["ref_vx"], drive["ref_vy"]) > 5.0
     assert np.degrees(np.median(est.series["beta_std"][moving])) < 0.8
+    assert two_sigma_share(drive, est) >= 0.9
+
+
+def test_positions_only_an_unknown_latency_is_one_offset_not_white_noise() -> None:
+    """race_lap with issue 15's receiver (20 Hz positions, 50 ms late, antenna 0.5 m ahead of
+    the file's): the latency and lever arm the drive cannot identify shift the fixes along the
+    track by one offset for many fixes.  Counted as white at every fix, the hundreds of fixes in
+    a turn pinned that offset to centimetres and bent the slip to explain it (beta RMSE 0.166
+    deg); counted once per second of fixes along the track, 0.094 (suite mean 0.090 -> 0.079,
+    30 % soft file 0.121 -> 0.119).  Bounds: 0.13 deg, and 2 sigma share at least 0.9."""
+    drive = _positions_only("race_lap")
+    vehicle = load_vehicle(drive.meta["vehicle"])
+    est = run_method("fused", drive, vehicle)
+    assert metrics(drive, est.series)["beta_rmse_deg"] < 0.13
     assert two_sigma_share(drive, est) >= 0.9

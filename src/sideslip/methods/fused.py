@@ -40,7 +40,11 @@ catch a multipath burst (a run of moderately wrong epochs that agree with each o
 each Doppler epoch is also checked against the velocity the accelerometers carried forward
 from the last epoch that agreed with them (``doppler_check``; the tyres play no part in it, so
 a wrong tyre model is not taken for a bad receiver): a disagreeing epoch gets the variance of
-its disagreement, and after a run of them the excess stays for ``doppler_check_tau_s``.
+its disagreement, and after a run of them the excess stays for ``doppler_check_tau_s``;
+after a bank change (roll gyro less the suspension's roll, ``doppler_check_bank_tau_s``) the
+check allows for the offset state's lag behind the road.  With positions but no Doppler, an
+unidentified latency and lever arm are one along-track (l_y: cross-track) offset for about
+``gnss_offset_span_s`` of fixes, not white noise at every fix.
 Consistency between cues: the windowed NIS of the axle and GNSS innovations
 (``sideslip.filters.consistency``) flags spans where the cues disagree beyond their sigma;
 there ``beta_std`` grows by the square root of the inflation and ``health`` (0 good ... 1
@@ -277,7 +281,9 @@ def _process_psd(nx: int, nz: FusedSettings) -> FloatArray:
     return q
 
 
-def _config(nz: FusedSettings, k_phi: float, calibrate: bool, has_vel: bool) -> FloatArray:
+def _config(
+    nz: FusedSettings, k_phi: float, calibrate: bool, has_vel: bool, fix_rate_hz: float = 1.0
+) -> FloatArray:
     cfg = np.zeros(eng.N_CFG)
     cfg[eng.C_WHEEL_SIGMA] = nz.wheel_sigma
     cfg[eng.C_STILL_SPEED] = nz.standstill_speed
@@ -295,6 +301,7 @@ def _config(nz: FusedSettings, k_phi: float, calibrate: bool, has_vel: bool) -> 
     if not calibrate and not has_vel:  # positions only, calibration not identified
         cfg[eng.C_POS_LEVER] = nz.lever_prior_sigma_m
         cfg[eng.C_POS_LATENCY] = nz.latency_prior_sigma_s
+        cfg[eng.C_POS_BIAS_FIXES] = max(1.0, fix_rate_hz * nz.gnss_offset_span_s)
     cfg[eng.C_FORCE_SIGMA] = nz.force_sigma
     cfg[eng.C_FORCE_REL] = nz.force_rel
     cfg[eng.C_ADAPT_TAU] = nz.adapt_tau_s
@@ -307,6 +314,7 @@ def _config(nz: FusedSettings, k_phi: float, calibrate: bool, has_vel: bool) -> 
     cfg[eng.C_VCHECK_ACCEL] = nz.doppler_check_accel_sigma if nz.doppler_check else 0.0
     cfg[eng.C_VCHECK_GATE] = nz.doppler_check_chi2
     cfg[eng.C_VCHECK_TAU] = nz.doppler_check_tau_s
+    cfg[eng.C_VCHECK_RAMP_TAU] = nz.doppler_check_bank_tau_s
     return cfg
 
 
@@ -465,7 +473,9 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
         del ax, ay
     if rebuild:
         del wz, wy, fy_lp
-    cfg = _config(nz, k_phi, calibrate, has_vel)
+    fix_t = t[g_rows[np.isfinite(gn["gnss_e"])]] if has_pos else t[:0]
+    fix_rate = 1.0 / float(np.median(np.diff(fix_t))) if fix_t.size > 1 else 1.0
+    cfg = _config(nz, k_phi, calibrate, has_vel, fix_rate)
     # the axle noise identified from the innovations may fall below its prior only where GNSS
     # gives v_y independently of the tyres (FusedSettings.adapt_min): not where the tyres
     # carry the slip (no GNSS; positions alone, whose arcs agree with any slip the tyres say)

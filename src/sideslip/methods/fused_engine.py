@@ -97,7 +97,10 @@ C_ADAPT_MIN = 24  # the adaptive axle noise's smallest factor
 C_VCHECK_ACCEL = 25  # m/s^2: drift of the IMU-carried check velocity (0: no check)
 C_VCHECK_GATE = 26  # chi^2 (2 dof) of the check
 C_VCHECK_TAU = 27  # s: how long a disagreement keeps the receiver suspect
-N_CFG = 28
+C_POS_BIAS_FIXES = 28  # fixes one unidentified latency / lever-arm offset spans (variance factor)
+ROLL_MODEL_SLACK_RAD = 0.035  # roll a file's suspension model may miss (2 deg): not a bank change
+C_VCHECK_RAMP_TAU = 29  # s: how long after a bank change the check allows for c_y's lag
+N_CFG = 30
 
 # the states whose variance is kept at every node (the outputs' sigmas, the beta_std terms and
 # mu's params); ``VAR_COLUMN[state]`` is its column in the node variances.  The full diagonal
@@ -156,7 +159,8 @@ def _doppler_check(chk, t, y_e, y_n, var_g, fy, cfg):
     against the IMU; returns the factor on ``var_g`` (1: taken as the receiver says).
 
     ``chk = [v_e, v_n, variance at anchor, anchor time, suspect variance, its time,
-    consecutive disagreeing epochs, roll gyro angle since the anchor, f_y at the anchor]``.
+    consecutive disagreeing epochs, roll gyro angle since the anchor, f_y at the anchor, roll
+    gyro angle since the start, its low-pass less the suspension roll]`` (:func:`_track_road_roll`).
 
     The anchor is the velocity of the last epoch that agreed with the inertial propagation,
     carried forward by the process model's own velocity changes (:func:`forward_nodes`), so
@@ -186,7 +190,12 @@ def _doppler_check(chk, t, y_e, y_n, var_g, fy, cfg):
         return 1.0
     dt = max(t - chk[3], 0.0)
     d_bank = chk[7] - cfg[C_K_PHI] * (fy - chk[8])  # roll not carried by the model, rad
-    var_c = chk[2] + cfg[C_ACCEL_VRW] ** 2 * dt + ((cfg[C_VCHECK_ACCEL] + G * abs(d_bank)) * dt) ** 2
+    # the road's roll over the last C_VCHECK_RAMP_TAU seconds: after a bank ramp the offset
+    # state c_y still lags at the anchor, and "since the anchor" misses that
+    recent = abs(chk[9] - cfg[C_K_PHI] * fy - chk[10]) if math.isfinite(chk[10]) else 0.0
+    recent = max(recent - ROLL_MODEL_SLACK_RAD, 0.0)
+    off = cfg[C_VCHECK_ACCEL] + G * max(abs(d_bank), recent)
+    var_c = chk[2] + cfg[C_ACCEL_VRW] ** 2 * dt + (off * dt) ** 2
     de, dn = y_e - chk[0], y_n - chk[1]
     dist2 = de * de + dn * dn
     suspect = 0.0
@@ -201,6 +210,19 @@ def _doppler_check(chk, t, y_e, y_n, var_g, fy, cfg):
     if chk[6] >= 2.0:
         chk[4], chk[5] = max(excess, suspect), t
     return 1.0 + max(excess, suspect) / var_g
+
+
+@numba.njit(cache=True, nogil=True)
+def _track_road_roll(chk, dt, fy, cfg):
+    """Low-pass (time constant ``C_VCHECK_RAMP_TAU``) of the road's roll angle, the roll gyro
+    integrated (``chk[9]``) less the suspension's roll ``k_phi f_y``, into ``chk[10]``; their
+    difference is the bank change the offset state c_y may not have followed yet."""
+    road = chk[9] - cfg[C_K_PHI] * fy
+    if not math.isfinite(chk[10]) or cfg[C_VCHECK_RAMP_TAU] <= 0.0:
+        chk[10] = road
+        return
+    a = min(dt / cfg[C_VCHECK_RAMP_TAU], 1.0)
+    chk[10] += a * (road - chk[10])
 
 
 @numba.njit(cache=True)
@@ -294,7 +316,7 @@ def forward_nodes(
     ng = g_node.size
     t_vel_ok = tn[0]
     t_pos_ok = tn[0]
-    chk = np.array([0.0, 0.0, 0.0, np.nan, 0.0, np.nan, 0.0, 0.0, 0.0])  # _doppler_check's state
+    chk = np.array([0.0, 0.0, 0.0, np.nan, 0.0, np.nan, 0.0, 0.0, 0.0, 0.0, np.nan])  # _doppler_check's
     for k in range(N):
         if k > 0:
             _predict(x, P, U[k - 1], tn[k] - tn[k - 1], cfg, q, rows, xn, Pn, F, dr, qk, tmp)
@@ -304,6 +326,8 @@ def forward_nodes(
             chk[0] += ve1 - ve0
             chk[1] += vn1 - vn0
             chk[7] += U[k - 1, U_WX] * (tn[k] - tn[k - 1])
+            chk[9] += U[k - 1, U_WX] * (tn[k] - tn[k - 1])
+            _track_road_roll(chk, tn[k] - tn[k - 1], U[k, U_FY], cfg)
             x[:] = xn
             P[:, :] = Pn
         dtk = tn[k] - tn[k - 1] if k > 0 else 0.0
@@ -410,10 +434,13 @@ def forward_nodes(
                 counts[0 if ok else 1] += 1
             if math.isfinite(g_e[gi]) and math.isfinite(g_n[gi]):
                 he, hn = gnss_position(x, u, cfg[C_K_PHI], lever, g_age[gi], H2)
-                # an unidentified latency and lever arm are position noise (speed x latency)
-                r_pos = g_pstd[gi] ** 2 + cfg[C_POS_LEVER] ** 2 + (x[IVX] * cfg[C_POS_LATENCY]) ** 2
                 g_gate = cfg[C_GATE_GNSS] if tn[k] - t_pos_ok < cfg[C_GNSS_RESET] else 1e300
-                d2 = update_robust_pair_ws_nb(x, P, H2, g_e[gi] - he, g_n[gi] - hn, r_pos, g_gate, work)
+                y_e, y_n = g_e[gi] - he, g_n[gi] - hn
+                r_pos = g_pstd[gi] ** 2
+                if cfg[C_POS_BIAS_FIXES] > 0.0:
+                    y_e, y_n = _position_bias_whiten(x, H2, y_e, y_n, r_pos, cfg)
+                    r_pos = 1.0
+                d2 = update_robust_pair_ws_nb(x, P, H2, y_e, y_n, r_pos, g_gate, work)
                 ok = d2 <= g_gate
                 if ok:
                     t_pos_ok = tn[k]
@@ -432,6 +459,45 @@ def forward_nodes(
     for i in range(nx):
         var_last[i] = P[i, i]
     return xs, Ps, var, var_last, cov_vxvy, nis, counts
+
+
+@numba.njit(cache=True, nogil=True)
+def _position_bias_whiten(x, H, y_e, y_n, r_white, cfg):
+    """An unidentified receiver latency and antenna lever arm as position noise: whitens the
+    fix's innovation (``H`` in place) to unit variance, returns the whitened pair.
+
+    A latency tau moves the fix by v tau along the track and an antenna misplaced along the
+    body by l_x the same way; a sideways misplacement l_y moves it across.  Both are offsets
+    that stay for many fixes, not white noise: counted as white at every fix of a fast
+    receiver, they let a turn's hundreds of fixes pin an along-track offset to centimetres,
+    and the estimator bends the slip to explain it.  Their variance (``C_POS_LATENCY`` s
+    times the speed, and ``C_POS_LEVER`` m, 1-sigma each) is on both axes once, as white
+    noise (a slow receiver's fixes are each their own draw), and beyond that the along-track
+    part (latency and l_x) on the along-track axis and l_y's on the cross-track axis again
+    ``C_POS_BIAS_FIXES - 1`` times, the number of fixes one offset spans (the usual inflation
+    that lets correlated errors be processed as white); the receiver's white part
+    ``r_white`` (m^2) on both.  The track direction is the state's velocity (its heading when
+    slow)."""
+    c, s = math.cos(x[IPSI]), math.sin(x[IPSI])
+    ve = x[IVX] * c - x[IVY] * s
+    vn = x[IVX] * s + x[IVY] * c
+    v = math.hypot(ve, vn)
+    if v > 0.5:
+        ca, sa = ve / v, vn / v
+    else:
+        ca, sa = c, s
+    extra = max(cfg[C_POS_BIAS_FIXES] - 1.0, 0.0)
+    lever2 = cfg[C_POS_LEVER] ** 2
+    along2 = lever2 + (v * cfg[C_POS_LATENCY]) ** 2
+    sd_a = math.sqrt(r_white + along2 + extra * along2)
+    sd_c = math.sqrt(r_white + along2 + extra * lever2)
+    y_a = (ca * y_e + sa * y_n) / sd_a
+    y_c = (-sa * y_e + ca * y_n) / sd_c
+    for j in range(H.shape[1]):
+        h_e, h_n = H[0, j], H[1, j]
+        H[0, j] = (ca * h_e + sa * h_n) / sd_a
+        H[1, j] = (-sa * h_e + ca * h_n) / sd_c
+    return y_a, y_c
 
 
 @numba.njit(cache=True, nogil=True)

@@ -122,6 +122,10 @@ class FusedSettings:
     # 50 ms late, 0.5 m ahead, i.e. no offset at 10 m/s) it costs: positions-only suite
     # 0.081 -> 0.090 (right file), 0.124 -> 0.121 (soft)
     identify_gnss_latency: bool = True
+    # positions only: how long one unidentified latency / lever-arm offset of the fixes lasts
+    # for the noise model (its variance times the fixes in this span, at least one: a span
+    # shorter than the fix interval counts it as white)
+    gnss_offset_span_s: float = 1.0
     health_window_s: float = 2.0  # s: window of the consistency test
     # the axle curve of the tyre relations (models.axle_force): 0, the brush (Fiala) curve; a
     # value > 1, the simplified Magic Formula with that shape factor (1.3: Pacejka's typical
@@ -145,6 +149,7 @@ class FusedSettings:
     doppler_check_accel_sigma: float = 0.1  # m/s^2: drift of the carried velocity (10 mg class)
     doppler_check_chi2: float = 9.21  # chi^2 (2 dof, 99 %) of the check
     doppler_check_tau_s: float = 2.0  # s: multipath persists while the reflecting geometry lasts
+    doppler_check_bank_tau_s: float = 2.0  # s: c_y's lag after a bank change the check allows for
 
     def __post_init__(self) -> None:
         for f in fields(self):
