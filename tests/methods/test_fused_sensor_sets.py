@@ -239,8 +239,8 @@ def test_positions_only_an_unknown_latency_is_one_offset_not_white_noise() -> No
     the file's): the latency and lever arm the drive cannot identify shift the fixes along the
     track by one offset for many fixes.  Counted as white at every fix, the hundreds of fixes in
     a turn pinned that offset to centimetres and bent the slip to explain it (beta RMSE 0.166
-    deg); counted once per second of fixes along the track, 0.094 (suite mean 0.090 -> 0.079,
-    30 % soft file 0.121 -> 0.119).  Bounds: 0.13 deg, and 2 sigma share at least 0.9."""
+    deg); counted once per second of fixes along the track, 0.094 (suite mean 0.090 -> 0.078,
+    30 % soft file 0.121 -> 0.120).  Bounds: 0.13 deg, and 2 sigma share at least 0.9."""
     drive = _positions_only("race_lap")
     vehicle = load_vehicle(drive.meta["vehicle"])
     est = run_method("fused", drive, vehicle)
