@@ -2,7 +2,9 @@
 identified from their innovations (the adaptive factor follows the NIS down as well as up,
 bounded at FusedSettings.adapt_min), so the tyres, not the Doppler noise, set beta where the
 brush model fits.  Before, fused sat at an error floor of 0.02-0.04 deg (demo 0.022, urban_highway
-0.035) with axle NIS 0.04-0.05 (sigma ~4.5x too wide)."""
+0.035) with axle NIS 0.04-0.05 (sigma ~4.5x too wide).  The deflation is an option
+(``adapt_min = 0.25``): by default the factor stays >= 1, since on the real comma2k19 minute the
+deflated sigma held 81 % of the errors inside 2 sigma (tests/io/test_realdata_check.py)."""
 
 from __future__ import annotations
 
@@ -26,7 +28,7 @@ def _run(name: str, scenario: str, **settings: float):
 def test_fused_is_within_ten_percent_of_doppler_slip_on_the_demo_drive():
     # issue 15's target (best or within 10 % of the best); measured 0.0124 against doppler_slip's
     # 0.0125 (before: 0.0218, 75 % behind)
-    drive, est = _run("fused", "demo")
+    drive, est = _run("fused", "demo", adapt_min=0.25)
     _, ref = _run("doppler_slip", "demo")
     ours = metrics(drive, est.series)["beta_rmse_deg"]
     best = metrics(drive, ref.series)["beta_rmse_deg"]
@@ -37,7 +39,7 @@ def test_fused_is_within_ten_percent_of_doppler_slip_on_the_demo_drive():
 def test_fused_error_floor_on_gentle_doppler_drives(scenario, bound):
     # measured 0.0245 / 0.0124 deg (before 0.0355 / 0.0218): the bound sits at 40 % of the gain
     # from the new value, so seed-level changes elsewhere do not trip it but the old floor does
-    drive, est = _run("fused", scenario)
+    drive, est = _run("fused", scenario, adapt_min=0.25)
     assert metrics(drive, est.series)["beta_rmse_deg"] <= bound
     # and the sigma stays honest (compare_methods' 2-sigma share, 0.95 for a calibrated Gaussian)
     gate = drive["ref_vx"] > SPEED_GATE
@@ -46,10 +48,10 @@ def test_fused_error_floor_on_gentle_doppler_drives(scenario, bound):
 
 
 def test_the_old_floor_is_the_undeflated_axle_noise():
-    # with the factor held at >= 1 (the old behaviour) the floor comes back: the gain is the
+    # with the factor held at >= 1 (the default) the floor comes back: the gain is the
     # identified axle noise, nothing else
-    drive, old = _run("fused", "demo", adapt_min=1.0)
-    _, new = _run("fused", "demo")
+    drive, old = _run("fused", "demo")  # the default: factor >= 1
+    _, new = _run("fused", "demo", adapt_min=0.25)
     e_old = metrics(drive, old.series)["beta_rmse_deg"]
     e_new = metrics(drive, new.series)["beta_rmse_deg"]
     assert e_new < 0.75 * e_old
