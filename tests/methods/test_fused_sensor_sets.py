@@ -203,6 +203,22 @@ def test_positions_only_latency_is_used_where_speed_changes_reveal_it() -> None:
     assert metrics(drive, off.series)["beta_rmse_deg"] > 3.0 * on_rmse
 
 
+def test_positions_only_the_lateral_lever_arm_is_identified_and_used() -> None:
+    """urban_course, 20 Hz fixes 50 ms late, the antenna 0.5 m ahead of and 0.5 m left of where
+    the file says (on the centreline): the fit of the fixes' speed against the wheels gives the
+    lateral lever arm (its speed in turns), used with the file's 0 as prior: measured 0.484 m
+    (posterior sigma 0.11 m); the bound is 2 of its sigmas.  The params say what was used."""
+    from tests.test_gnss_latency import positions_drive
+
+    drive = positions_drive("urban_course", 0.05, 0.5, 0.5)
+    est = run_method("fused", drive, load_vehicle(drive.meta["vehicle"]))
+    p = est.params
+    assert p["gnss_lever_arm_y_m_sigma"] < 0.2
+    assert abs(p["gnss_lever_arm_y_m"] - 0.5) < 2.0 * p["gnss_lever_arm_y_m_sigma"]
+    assert p["gnss_lever_arm_y_identified_m"] == pytest.approx(0.5, abs=0.3)
+    assert "lateral lever arm from the same fit" in p["assumed"]["gnss_latency_lever"]
+
+
 @pytest.mark.parametrize("method", ["fused", "fused_filter"])
 def test_an_unrevealed_latency_widens_beta_std_instead_of_hiding(method: str) -> None:
     """two_turns_gyro_sf at constant speed with fixes 0.15 s late: no speed change reveals the

@@ -110,6 +110,11 @@ class FusedSettings:
     # the road bank changes as the body rolls: the roll gyro (less the suspension's roll
     # rate) drives c_y when the drive has wx, instead of c_y's random walk alone
     roll_gyro_bank: bool = True
+    # the roll gain from the roll gyro in the drive's lateral transients where it contradicts
+    # the file's m h / (k - m g h) (sideslip.methods.roll_gyro_gradient; read from the whole
+    # drive, for the causal filter too, as a calibration of the car): a file whose mass, CG
+    # height and roll stiffness double the roll misreads the tyres' force by 15 % at the limit
+    identify_roll_gradient: bool = True
     # without GNSS the smoother's axle forces are low-passed zero-phase and split with the
     # yaw acceleration (the transients are then the stiffness's only teacher; fused.fuse)
     tyres_only_transients: bool = True
