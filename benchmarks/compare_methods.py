@@ -18,6 +18,7 @@ import datetime as dt
 import math
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -137,6 +138,32 @@ def fused_behind(rows: dict[str, dict[str, float]], scenarios: tuple[str, ...]) 
     return f"fused more than 10 % behind the best other method in {len(cells)} of {len(scenarios)}: " + "; ".join(cells) + "."
 
 
+def _per_method_table(
+    heading: str,
+    intro: list[str],
+    values: dict[str, dict[str, float]],
+    scenarios: tuple[str, ...],
+    methods: list[str],
+    fmt: str,
+    summary: str,
+    summarise: Any,
+) -> list[str]:
+    """A markdown table, one row per method that has a value in any scenario, its cells
+    ``fmt``-formatted (- where none) and a last column ``summary`` = ``summarise`` of the row;
+    no lines where no method has a value."""
+    names = [n for n in methods if any(n in values[sc] for sc in scenarios)]
+    if not names:
+        return []
+    lines = [heading, "", *intro, "| method | " + " | ".join(scenarios) + f" | {summary} |"]
+    lines.append("|---|" + "---:|" * (len(scenarios) + 1))
+    for name in names:
+        vals = [values[sc].get(name) for sc in scenarios]
+        cells = ["–" if v is None else fmt.format(v) for v in vals]
+        last = fmt.format(summarise(v for v in vals if v is not None))
+        lines.append(f"| {name} | " + " | ".join(cells) + f" | {last} |")
+    return [*lines, ""]
+
+
 def run(
     seed: int,
     only_methods: list[str] | None = None,
@@ -234,44 +261,25 @@ def run(
         if behind is not None:
             lines += [behind, ""]
     for file_key, (title, _) in FILES.items():
-        cov = share[file_key]
-        names = [n for n in methods if any(n in cov[sc] for sc in SCEN)]
-        if not names:
-            continue
-        lines += [
+        lines += _per_method_table(
             f"## Share of beta errors inside 2 beta_std ({title})",
-            "",
-            "| method | " + " | ".join(SCEN) + " | min |",
-            "|---|" + "---:|" * (len(SCEN) + 1),
-        ]
-        for name in names:
-            vals = [cov[sc].get(name) for sc in SCEN]
-            cells = ["–" if v is None else f"{v:.2f}" for v in vals]
-            finite = [v for v in vals if v is not None]
-            lines.append(f"| {name} | " + " | ".join(cells) + f" | {min(finite):.2f} |")
-        lines += ["", "A calibrated Gaussian gives 0.95; below 0.90 the sigma is overconfident.", ""]
+            [],
+            share[file_key], SCEN, methods, "{:.2f}", "min", min,
+        )  # fmt: skip
+        if any(share[file_key][sc] for sc in SCEN):
+            lines += ["A calibrated Gaussian gives 0.95; below 0.90 the sigma is overconfident.", ""]
     for file_key, (title, _) in FILES.items():
-        flat = straight[file_key]
-        names = [n for n in methods if any(n in flat[sc] for sc in SCEN)]
-        if not names:
-            continue
-        lines += [
+        lines += _per_method_table(
             f"## Straight driving: beta RMSE less that of beta = 0 ({title})",
-            "",
-            f"Rows faster than {SPEED_GATE:g} m/s with |a_y| < {STRAIGHT_AY_M_S2:g} m/s^2 (the "
-            "reference's a_y); deg, positive where the method is worse than beta = 0.  Issue 15 "
-            "point 4: never worse by more than 0.1 deg.  Scenarios with under "
-            f"{STRAIGHT_MIN_S:g} s of such rows: -.",
-            "",
-            "| method | " + " | ".join(SCEN) + " | max |",
-            "|---|" + "---:|" * (len(SCEN) + 1),
-        ]
-        for name in names:
-            vals = [flat[sc].get(name) for sc in SCEN]
-            cells = ["–" if v is None else f"{v:+.3f}" for v in vals]
-            finite = [v for v in vals if v is not None]
-            lines.append(f"| {name} | " + " | ".join(cells) + f" | {max(finite):+.3f} |")
-        lines.append("")
+            [
+                f"Rows faster than {SPEED_GATE:g} m/s with |a_y| < {STRAIGHT_AY_M_S2:g} m/s^2 (the "
+                "reference's a_y); deg, positive where the method is worse than beta = 0.  Issue 15 "
+                "point 4: never worse by more than 0.1 deg.  Scenarios with under "
+                f"{STRAIGHT_MIN_S:g} s of such rows: -.",
+                "",
+            ],
+            straight[file_key], SCEN, methods, "{:+.3f}", "max", max,
+        )  # fmt: skip
     return "\n".join(lines)
 
 
