@@ -247,6 +247,17 @@ def long_drive(tmp_path_factory) -> Path:
     return p
 
 
+def _as_from_a_shell() -> None:
+    """In the child before exec: SIGINT and SIGTERM at their defaults and none blocked, as an
+    interactive shell starts a command.  A test run started in the background of a script
+    (``cmd &`` without job control, nohup, some CI runners) ignores SIGINT, every child
+    inherits that, and Python then never turns SIGINT into KeyboardInterrupt (seen: the
+    suite run as ``(make test &)`` failed both SIGINT cases, exit 0 with complete outputs)."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    signal.pthread_sigmask(signal.SIG_SETMASK, [])
+
+
 def _lines(stream, sink: list[str]) -> None:
     for line in stream:
         sink.append(line)
@@ -260,7 +271,7 @@ def test_interrupt_leaves_no_output_and_no_temp_file(tmp_path, long_drive, sig, 
     proc = subprocess.Popen(
         [sys.executable, "-m", "sideslip.cli", "estimate", str(long_drive), "--vehicle", "midsize_sedan",
          "--method", "kinematic_integration", "--method", "fused", "--out", str(out_dir / "est.csv")],
-        stderr=subprocess.PIPE, stdout=subprocess.DEVNULL, text=True,
+        stderr=subprocess.PIPE, stdout=subprocess.DEVNULL, text=True, preexec_fn=_as_from_a_shell,
     )
     err: list[str] = []
     threading.Thread(target=_lines, args=(proc.stderr, err), daemon=True).start()
