@@ -254,3 +254,29 @@ def test_filter_is_accurate_and_honest_at_the_limit_and_with_a_soft_file(scenari
     est = fuse(drive, v.with_changes(cf=factor * v.cf, cr=factor * v.cr), smooth=False)
     assert metrics(drive, est.series)["beta_rmse_deg"] < bound
     assert two_sigma_share(drive, est) >= 0.90
+
+
+@pytest.mark.parametrize("smooth", [True, False])
+def test_a_drive_that_starts_from_rest_and_reverses(smooth):
+    """Parking drive (robust_drives): pull away from rest, 8 m/s with gentle steering, stop,
+    reverse at 2 m/s with 10 deg of steer.  Before the rear axle's low-speed relation the
+    first Doppler course error at walking pace went into v_y, the tyre relation met a slip
+    past saturation and was gated, and beta stayed 5.8 deg (smoother) / 9.4 deg (filter) off
+    above 5 m/s with 2 sigma of 6 deg.  Truth here is |beta| <= 1.3 deg; the paper methods
+    score 0.02 deg: within 0.2 deg (10x theirs, 3 % of the failure) and the 2-sigma share
+    >= 0.9; the heading, 5.8 / 9.3 deg off with it, within 0.5 deg (kkf's bound in issue 15;
+    measured 0.08 / 0.14).  Reversing (truth: the kinematic 5.9 deg of 10 deg steer, read as
+    atan(v_y / |v_x|)): within 1 deg rms (measured 0.33 / 0.51; it was 4.5 / 6.2)."""
+    from tests.methods.robust_drives import parking_drive
+
+    drive = parking_drive()
+    est = fuse(drive, load_vehicle("midsize_sedan"), smooth=smooth)
+    m = metrics(drive, est.series)
+    assert m["beta_rmse_deg"] < 0.2, m["beta_rmse_deg"]
+    assert two_sigma_share(drive, est) >= 0.9
+    assert m["yaw_rmse_deg"] < 0.5, m["yaw_rmse_deg"]
+    rev = drive["ref_vx"] < -1.5
+    truth = np.arctan2(drive["ref_vy"][rev], np.abs(drive["ref_vx"][rev]))
+    err = np.degrees(est["beta"][rev] - truth)
+    assert abs(np.degrees(np.median(truth))) > 5.0
+    assert np.sqrt(np.mean(err**2)) < 1.0, np.sqrt(np.mean(err**2))

@@ -9,7 +9,19 @@ import numpy as np
 import pytest
 
 from sideslip.models import fused_measurements as fm
-from sideslip.models.fused_process import IMU, IPSI, ISF, ISR, ISW, ITAU, IVX, IVY, NX_CORE, NX_GNSS_CAL
+from sideslip.models.fused_process import (
+    IMU,
+    IPSI,
+    ISF,
+    ISR,
+    ISW,
+    ITAU,
+    IVX,
+    IVY,
+    NX_CORE,
+    NX_GNSS_CAL,
+    U_WZ,
+)
 
 # [l_f, l_r, C_f/m, C_r/m, g l_r/L, g l_f/L, curve shape]: the brush curve, and the same axles
 # with the simplified Magic Formula curve (S = 1.3)
@@ -34,6 +46,7 @@ CASES = {
     "wheel_speed": (fm.wheel_speed, ()),
     "standstill_yaw_rate": (fm.standstill_yaw_rate, (U, 0.01)),
     "rear_axle_force": (fm.rear_axle_force, (U, 0.01, AXLE)),
+    "rear_axle_velocity": (fm.rear_axle_velocity, (U, 0.01, AXLE)),
     "front_axle_force": (fm.front_axle_force, (U, 0.05, 0.01, AXLE)),
     "rear_axle_force_magic": (fm.rear_axle_force, (U, 0.01, AXLE_MF)),
     "front_axle_force_magic": (fm.front_axle_force, (U, 0.05, 0.01, AXLE_MF)),
@@ -69,6 +82,20 @@ def test_rear_axle_force_is_linear_tyre_at_small_slip():
     f, _ = fm.predicted(fm.rear_axle_force, x, u, 0.0, AXLE)
     u = AXLE[fm.A_CR] * 0.001 / (3 * AXLE[fm.A_NR])
     assert f[0] == pytest.approx(AXLE[fm.A_CR] * 0.001 * (1 - u), rel=1e-4)
+
+
+def test_rear_axle_velocity_is_the_slip_angles_numerator_in_reverse_too():
+    """Reversing at 2 m/s, v_y = 0.2 m/s, gyro 0.15 rad/s (no bias, level): the rear axle
+    moves sideways at v_y - l_r r; the same value forwards (no division by v_x)."""
+    x = np.zeros(NX_CORE)
+    x[IVX], x[IVY] = -2.0, 0.2
+    u = np.zeros(7)
+    u[U_WZ] = 0.15
+    back, _ = fm.predicted(fm.rear_axle_velocity, x, u, 0.0, AXLE)
+    x[IVX] = 2.0
+    ahead, _ = fm.predicted(fm.rear_axle_velocity, x, u, 0.0, AXLE)
+    assert back[0] == pytest.approx(0.2 - AXLE[fm.A_LR] * 0.15)
+    assert ahead[0] == pytest.approx(back[0])
 
 
 def test_position_of_a_late_fix_lies_behind_along_the_track():

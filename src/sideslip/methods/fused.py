@@ -341,6 +341,8 @@ def _config(
     cfg[eng.C_FORCE_REL] = nz.force_rel
     cfg[eng.C_ADAPT_TAU] = nz.adapt_tau_s
     cfg[eng.C_AXLE_MIN_SPEED] = nz.axle_min_speed
+    cfg[eng.C_LOW_SPEED_SIGMA] = nz.low_speed_sigma if nz.low_speed_axle else 0.0
+    cfg[eng.C_CG_SIGMA] = nz.cg_sigma_m
     cfg[eng.C_K_PHI] = k_phi
     cfg[eng.C_STIFF_CURVE] = nz.stiffness_curve_accel
     cfg[eng.C_ADAPT_MAX] = nz.adapt_max

@@ -35,14 +35,17 @@ from sideslip.filters.kalman import (
 from sideslip.gnss import gauss_markov_nb
 from sideslip.methods.fused_updates import wheel_slip_ratio
 from sideslip.models.fused_measurements import (
+    A_CR,
     A_LF,
     A_LR,
     A_NF,
     A_NR,
+    SCALE_MIN,
     front_axle_force,
     gnss_position,
     gnss_velocity,
     rear_axle_force,
+    rear_axle_velocity,
     standstill_yaw_rate,
     wheel_speed,
 )
@@ -100,7 +103,9 @@ C_VCHECK_TAU = 27  # s: how long a disagreement keeps the receiver suspect
 C_POS_BIAS_FIXES = 28  # fixes one unidentified latency / lever-arm offset spans (variance factor)
 ROLL_MODEL_SLACK_RAD = 0.035  # roll a file's suspension model may miss (2 deg): not a bank change
 C_VCHECK_RAMP_TAU = 29  # s: how long after a bank change the check allows for c_y's lag
-N_CFG = 30
+C_LOW_SPEED_SIGMA = 30  # m/s: the rear axle's sideways velocity below C_AXLE_MIN_SPEED (0: off)
+C_CG_SIGMA = 31  # m: the file's l_r uncertainty, in that relation
+N_CFG = 32
 
 # the states whose variance is kept at every node (the outputs' sigmas, the beta_std terms and
 # mu's params); ``VAR_COLUMN[state]`` is its column in the node variances.  The full diagonal
@@ -332,7 +337,8 @@ def forward_nodes(
             P[:, :] = Pn
         dtk = tn[k] - tn[k - 1] if k > 0 else 0.0
         u = U[k]
-        if math.isfinite(vw[k]) and abs(vw[k]) < cfg[C_STILL_SPEED]:
+        still = math.isfinite(vw[k]) and abs(vw[k]) < cfg[C_STILL_SPEED]
+        if still:
             # ---- standstill: zero velocity and zero yaw rate
             h[:] = 0.0
             h[IVX] = 1.0
@@ -372,6 +378,19 @@ def forward_nodes(
         # white noise: their variance is quoted per C_AXLE_TAU and scaled by C_AXLE_TAU / dt,
         # so that the information per second does not depend on the node rate
         rate_scale = cfg[C_AXLE_TAU] / max(dtk, 1e-3) if k > 0 else 1.0
+        if x[IVX] <= cfg[C_AXLE_MIN_SPEED] and cfg[C_LOW_SPEED_SIGMA] > 0.0 and not still:
+            # ---- walking pace and reversing: the rear axle rolls, it hardly slides sideways;
+            # v_y - l_r r = -|v_x| f_r / C_r (the slip angle's relation times |v_x|)
+            hv = rear_axle_velocity(x, u, cfg[C_K_PHI], axle, h, dr)
+            c_r = max(x[ISR], SCALE_MIN) * axle[A_CR]
+            f_r = f_rear[k] if math.isfinite(f_rear[k]) else 0.0
+            sig = (
+                cfg[C_LOW_SPEED_SIGMA]
+                + abs(x[IVX]) * (cfg[C_FORCE_SIGMA] + cfg[C_FORCE_REL] * abs(f_r)) / c_r
+                + cfg[C_CG_SIGMA] * abs(yaw_rate(x, u, cfg[C_K_PHI], dr))
+            )
+            d2, ok = _robust(x, P, -abs(x[IVX]) * f_r / c_r - hv, h, sig * sig * rate_scale, gate, work)
+            nis[k, K_REAR] = d2
         if x[IVX] > cfg[C_AXLE_MIN_SPEED]:
             # ---- axle force relations (brush model): the tyres' word on the slip angles
             if math.isfinite(f_rear[k]):

@@ -106,6 +106,18 @@ class FusedSettings:
     # offset enters beta_std (fused.fuse)
     accel_offset_sigma: float = 0.15
     axle_min_speed: float = 3.0  # m/s: below this the slip angles are ill-defined
+    # below axle_min_speed (pulling away, parking, reversing) the rear axle's sideways
+    # velocity v_y - l_r r stands in for the slip angle's relation: it is -|v_x| f_r / C_r
+    # (the slip at the measured force), within low_speed_sigma (m/s: tyre lateral compliance,
+    # uneven ground) plus the force's noise through the stiffness plus cg_sigma_m times the
+    # yaw rate (a file's l_r that is off).  Without it nothing holds v_y at walking pace: a
+    # drive that starts from rest put its first Doppler course error into v_y, the axle
+    # relation then met a slip beyond the tyre's saturation (no gradient, gated as an
+    # outlier), and the estimate kept beta 6 deg off all drive (tests/methods/robust_drives
+    # parking drive: fused 5.8 deg, fused_filter 9.4 deg above 5 m/s)
+    low_speed_axle: bool = True
+    low_speed_sigma: float = 0.05
+    cg_sigma_m: float = 0.1
     front_axle: bool = False  # use the steering angle (front-axle relation) when present
     # the road bank changes as the body rolls: the roll gyro (less the suspension's roll
     # rate) drives c_y when the drive has wx, instead of c_y's random walk alone

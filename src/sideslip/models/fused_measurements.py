@@ -8,6 +8,8 @@ the filter loop calls them per row; tests check every ``H`` against central diff
 * standstill         ``r = 0`` (yaw rate of a standing car; makes the gyro bias observable)
 * rear axle force    ``f_r = F_Fiala(z_r; s_r C_r / m, mu g l_f / L)``,
                      ``z_r = -(v_y - l_r r) / v_x`` (tan of the rear slip angle)
+* rear axle velocity ``v_y - l_r r``, the rear axle's sideways velocity (at parking speeds and
+                     reversing, where a slip angle is ill-defined but the axle hardly slides)
 * front axle force   ``f_f = F_Fiala(z_f; s_f C_f / m, mu g l_r / L) cos(delta)``,
                      ``z_f = tan(delta - atan((v_y + l_f r) / v_x))``
   (:mod:`sideslip.models.axle_force`; the axle forces per mass are "measured" from the
@@ -107,6 +109,19 @@ def rear_axle_force(x: NDArray, u: NDArray, k_phi: float, axle: NDArray, H: NDAr
     H[ISR] = df_dc * axle[A_CR] * dsr
     H[IMU] = df_df * axle[A_NR] * dmu
     return f
+
+
+@numba.njit(cache=True)
+def rear_axle_velocity(x: NDArray, u: NDArray, k_phi: float, axle: NDArray, H: NDArray, dr: NDArray) -> float:
+    """Sideways velocity of the rear axle's centre ``v_y - l_r r`` (m/s), any ``v_x``: the
+    numerator of the rear slip angle, well-conditioned at walking pace and in reverse."""
+    r = yaw_rate(x, u, k_phi, dr)
+    lr = axle[A_LR]
+    H[:] = 0.0
+    for j in (IBG, ISG, ICY, ICX):
+        H[j] = -lr * dr[j]
+    H[IVY] = 1.0
+    return x[IVY] - lr * r
 
 
 @numba.njit(cache=True)
@@ -235,7 +250,7 @@ def predicted(func: Any, x: NDArray, *args: object) -> tuple[NDArray, NDArray]:
     two = func in (gnss_velocity, gnss_position)
     H = np.zeros((2, x.size)) if two else np.zeros(x.size)
     extra = [a for a in args]
-    if func in (standstill_yaw_rate, rear_axle_force, front_axle_force, gnss_velocity):
+    if func in (standstill_yaw_rate, rear_axle_force, rear_axle_velocity, front_axle_force, gnss_velocity):
         out = func(x, *extra, H, np.zeros(x.size))
     else:
         out = func(x, *extra, H)
