@@ -9,19 +9,7 @@ import numpy as np
 import pytest
 
 from sideslip.models import fused_measurements as fm
-from sideslip.models.fused_process import (
-    IMU,
-    IPSI,
-    ISF,
-    ISR,
-    ISW,
-    ITAU,
-    IVX,
-    IVY,
-    NX_CORE,
-    NX_GNSS_CAL,
-    U_WZ,
-)
+from sideslip.models.fused_process import IMU, IPSI, ISF, ISR, ISW, ITAU, IVX, IVY, NX_CORE, NX_GNSS_CAL, U_WZ
 
 # [l_f, l_r, C_f/m, C_r/m, g l_r/L, g l_f/L, curve shape]: the brush curve, and the same axles
 # with the simplified Magic Formula curve (S = 1.3)
