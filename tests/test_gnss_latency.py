@@ -8,7 +8,7 @@ import functools
 
 import pytest
 
-from sideslip.gnss_latency import LatencyEstimate, identify_latency
+from sideslip.gnss_latency import LatencyEstimate, identify_doppler_latency, identify_latency
 from sideslip.simulate import SensorConfig, simulate
 from sideslip.simulate.run import _lookup
 from tests.conftest import sim_drive
@@ -75,3 +75,32 @@ def test_lever_posterior_keeps_the_prior_where_the_drive_did_not_turn() -> None:
     assert sigma == pytest.approx(0.5 / 2**0.5)
     straight = LatencyEstimate(0.0, 0.01, 1.0, 500)  # no turn: sigma inf
     assert straight.lever_y_posterior(prior_m=-0.3, prior_sigma_m=0.5) == (-0.3, 0.5)
+
+
+@functools.lru_cache(maxsize=4)
+def doppler_drive(name: str, latency_s: float) -> object:
+    """``name`` with its own receiver (10 Hz fixes and Doppler), every epoch ``latency_s`` late."""
+    config = SensorConfig().with_overrides(_lookup(name).sensor_overrides)
+    return simulate(name, seed=0, config=config.with_overrides({"gnss_latency_s": latency_s}))
+
+
+@pytest.mark.parametrize("latency_s", [0.0, 0.1])
+def test_doppler_latency_is_found_from_its_speed_against_the_wheels(latency_s: float) -> None:
+    """demo (a stop, speed changes): measured +0.000 / +0.101 s with a 1-sigma of 0.010 s for
+    the true 0 / 0.1 s; the bound asks for 2.5 sigma and a sigma that decides (under 15 ms,
+    fused's threshold for using it)."""
+    found = identify_doppler_latency(doppler_drive("demo", latency_s))
+    assert found is not None
+    assert found.sigma_s < 0.015
+    assert abs(found.latency_s - latency_s) < 2.5 * found.sigma_s
+
+
+def test_doppler_latency_of_a_constant_speed_drive_is_not_decided() -> None:
+    """step_steer at 80 km/h: the Doppler speed never leads or lags the wheels (measured
+    sigma of hundreds of seconds)."""
+    found = identify_doppler_latency(doppler_drive("step_steer", 0.1))
+    assert found is None or found.sigma_s > 1.0
+
+
+def test_no_doppler_latency_without_doppler() -> None:
+    assert identify_doppler_latency(positions_drive("suburban_outages", 0.05)) is None

@@ -63,6 +63,13 @@ MIN_SPEED_M_S = 3.0  # fixes below this speed are not used (wheel pulses, course
 MIN_FIXES = 100  # fixes needed for an estimate
 RATE_STEP_S = 0.25  # half-step of the central difference of the averaged wheel speed
 HUBER_K = 1.5  # Huber threshold, in robust sigmas of the residual
+# GNSS Doppler (identify_doppler_latency): the wheels' speed averaged over +-DOPPLER_HALF_S
+# around the epoch (a Doppler velocity is instantaneous, not a chord's), and only where it
+# changes slower than DOPPLER_MAX_RATE_M_S2: beyond, the wheels' slip is no longer linear in
+# the speed times its rate (race_lap, true latency 0: +0.044 +- 0.013 s with every epoch,
+# -0.063 +- 0.046 s below 3 m/s^2, i.e. the drive does not inform it)
+DOPPLER_HALF_S = 0.05
+DOPPLER_MAX_RATE_M_S2 = 3.0
 
 
 @dataclass(frozen=True)
@@ -160,6 +167,54 @@ def identify_latency(drive: Drive) -> LatencyEstimate | None:
     return LatencyEstimate(
         float(beta[1]) / k, math.sqrt(var_tau) / k, k, int(use.sum()), lever_y, lever_y_sigma
     )
+
+
+def identify_doppler_latency(drive: Drive) -> LatencyEstimate | None:
+    """The latency of the GNSS Doppler velocity (s: an epoch stamped at t reports the velocity
+    at t - tau) from its speed against the wheels', the fixes' model above without the chord
+    (a Doppler velocity is the antenna's at its epoch) and without the lever arm, over the
+    epochs above :data:`MIN_SPEED_M_S` whose speed changes slower than
+    :data:`DOPPLER_MAX_RATE_M_S2`.  The wheels are the clock: a latency of the wheel or CAN
+    speed comes out with the opposite sign.  None without Doppler, a speed signal or
+    :data:`MIN_FIXES` such epochs.
+
+    Measured (simulator, seed 0, 10 Hz Doppler 0 / 50 / 100 ms late): urban_course +0.005 /
+    +0.055 / +0.106 +- 0.006 s, demo +0.000 / +0.051 / +0.101 +- 0.010, suburban_outages
+    -0.008 / +0.043 / +0.093 +- 0.005; race_lap, urban_highway and drives at constant speed a
+    sigma of 0.05 s to hours (they do not inform it)."""
+    if "gnss_ve" not in drive or "gnss_vn" not in drive:
+        return None
+    dop = gnss.doppler_samples(drive)
+    speed = vehicle_speed(drive)
+    if dop.rows.size < MIN_FIXES or not np.isfinite(speed).any():
+        return None
+    t = drive.t
+    tc = t[dop.rows]
+    cum_s = np.concatenate(([0.0], np.cumsum(np.nan_to_num(speed) * np.gradient(t))))[1:]
+    s_w = _window_mean(t, cum_s, tc, DOPPLER_HALF_S)
+    ahead = _window_mean(t, cum_s, tc + RATE_STEP_S, DOPPLER_HALF_S)
+    s_rate = (ahead - _window_mean(t, cum_s, tc - RATE_STEP_S, DOPPLER_HALF_S)) / (2.0 * RATE_STEP_S)
+    y = dop.speed
+    edge = DOPPLER_HALF_S + RATE_STEP_S
+    use = (
+        np.isfinite(s_w) & np.isfinite(s_rate) & np.isfinite(y) & (s_w > MIN_SPEED_M_S)
+        & (np.abs(s_rate) < DOPPLER_MAX_RATE_M_S2) & (tc - t[0] > edge) & (t[-1] - tc > edge)
+    )  # fmt: skip
+    if int(use.sum()) < MIN_FIXES:
+        return None
+    sw, sr, y = s_w[use], s_rate[use], y[use]
+    X = np.column_stack([sw, -sr, -sw * np.maximum(sr, 0.0) / G, -sw * np.minimum(sr, 0.0) / G])
+    # the wheel-speed rate's window spans 2 RATE_STEP_S: epochs inside it share its errors
+    per_window = max(2.0 * RATE_STEP_S / float(np.median(np.diff(tc[use]))), 1.0)
+    fit = _huber_fit(X, y, per_window)
+    if fit is None:
+        return None
+    beta, cov = fit
+    k = float(beta[0])
+    var_tau = float(cov[1, 1])
+    if not (math.isfinite(k) and k > 0.5 and math.isfinite(var_tau) and var_tau >= 0.0):
+        return None
+    return LatencyEstimate(float(beta[1]) / k, math.sqrt(var_tau) / k, k, int(use.sum()))
 
 
 def _huber_fit(X: FloatArray, y: FloatArray, per_baseline: float) -> tuple[FloatArray, FloatArray] | None:

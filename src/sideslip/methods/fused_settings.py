@@ -149,6 +149,15 @@ class FusedSettings:
     # 50 ms late, 0.5 m ahead, i.e. no offset at 10 m/s) it costs: positions-only suite
     # 0.081 -> 0.090 (right file), 0.124 -> 0.121 (soft)
     identify_gnss_latency: bool = True
+    # GNSS Doppler: its latency from the Doppler speed against the wheels (tyre-free,
+    # sideslip.gnss_latency.identify_doppler_latency), applied where decisive and late
+    # (fused._doppler_latency); the epochs are then taken at their stamp less it, by the
+    # causal filter too (a calibration of the receiver, read from the whole drive)
+    identify_doppler_latency: bool = True
+    # 1-sigma (s) of a Doppler latency the drive does not decide (constant speed, the limit):
+    # a logger that stamps the receiver's messages on arrival is 50-100 ms late; r times it
+    # enters beta_std
+    doppler_latency_prior_sigma_s: float = 0.03
     # positions only: how long one unidentified latency / lever-arm offset of the fixes lasts
     # for the noise model (its variance times the fixes in this span, at least one: a span
     # shorter than the fix interval counts it as white)
