@@ -280,3 +280,28 @@ def test_a_drive_that_starts_from_rest_and_reverses(smooth):
     err = np.degrees(est["beta"][rev] - truth)
     assert abs(np.degrees(np.median(truth))) > 5.0
     assert np.sqrt(np.mean(err**2)) < 1.0, np.sqrt(np.mean(err**2))
+
+
+@pytest.mark.parametrize(
+    ("found", "used", "sigma"),
+    [
+        ((0.05, 0.005), 0.05, math.hypot(0.005, 0.01)),  # decisive and late: applied
+        ((0.015, 0.004), 0.0, 0.015),  # the 1 h bench drive on time: within the fit's errors
+        ((-0.08, 0.005), 0.0, 0.08),  # the wheels' clock late (a filtered CAN speed)
+        ((0.1, 0.05), 0.0, 0.03),  # not decided (race lap, constant speed): the prior
+    ],
+)
+def test_doppler_latency_is_applied_only_where_the_drive_decides_it(monkeypatch, found, used, sigma):
+    """fused._doppler_latency's choice from the tyre-free fit: the latency the epochs are taken
+    with and the sigma whose |r| multiple enters beta_std (0.03 s: the prior's default)."""
+    from sideslip.gnss_latency import LatencyEstimate
+    from sideslip.methods import fused
+
+    monkeypatch.setattr(fused, "identify_doppler_latency", lambda drive: LatencyEstimate(*found, 1.0, 500))
+    params: dict[str, object] = {}
+    tau, sig = fused._doppler_latency(sim_drive("demo"), FusedSettings(), params)
+    assert tau == pytest.approx(used)
+    assert sig == pytest.approx(sigma)
+    assert params["gnss_doppler_latency_s"] == pytest.approx(used)
+    off = FusedSettings(identify_doppler_latency=False)
+    assert fused._doppler_latency(sim_drive("demo"), off, {}) == (0.0, 0.0)

@@ -269,7 +269,7 @@ def test_a_late_doppler_is_taken_at_its_measurement_time(method: str) -> None:
     """demo with every GNSS epoch 100 ms late (a logger that stamps on arrival): before the
     Doppler latency was identified fused scored 0.287 deg with 63 % inside 2 sigma and
     fused_filter 0.266 deg (the Doppler course lags the heading by r tau, read as slip).
-    With it, as on time (0.022 / 0.041 deg on time; measured 0.023 / 0.044): within 2x the
+    With it, as on time (0.022 / 0.041 deg on time; measured 0.022 / 0.043): within 2x the
     on-time values and 2 sigma >= 0.9.  On time the fit (0.000 +- 0.010 s) is not applied."""
     from tests.test_gnss_latency import doppler_drive
 
