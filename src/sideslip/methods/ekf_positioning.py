@@ -155,7 +155,12 @@ from sideslip.models.kinematic_ekf import (
     V,
 )
 from sideslip.settings import settings_dict
-from sideslip.signals import causal_mean, gravity_lateral_sin, white_noise_sigma_100hz
+from sideslip.signals import (
+    causal_mean,
+    gravity_lateral_sin,
+    kernel_input,
+    white_noise_sigma_100hz,
+)
 from sideslip.vehicle import G, Vehicle
 
 FloatArray = NDArray[np.float64]
@@ -372,7 +377,8 @@ def run_ekf(
     # the GNSS error and the position start fully correlated (position came from GNSS)
     P0[E, GE] = P0[GE, E] = -0.9 * consts.gnss_gm_std**2 if fixes.any() else 0.0
     P0[N, GN] = P0[GN, N] = P0[E, GE]
-    out = ekf_loop(t, v_rl, v_rr, steer, wz, ge, gn, gstd, x0, P0, consts)
+    rows = [kernel_input(a) for a in (t, v_rl, v_rr, steer, wz, ge, gn, gstd)]
+    out = ekf_loop(*rows, x0, P0, consts)
     return EkfResult(*out[:6], align, *out[6:])
 
 
