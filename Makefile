@@ -8,10 +8,16 @@ STAMP := $(VENV)/.installed
 
 .PHONY: demo test test-browser browser warm lint bench clean
 
+# pip compiles every installed module to bytecode on one core (about 48 s of the install);
+# compileall does it on two.  Then the numba kernels: each is compiled on first use and cached
+# beside its source, about 55 s for `fused` alone, so they are compiled here, once, in two
+# processes (sideslip.warmup): the first estimate, `make demo` and the test workers start warm.
 $(STAMP): pyproject.toml constraints.txt
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -c constraints.txt -e ".[all]"
+	$(BIN)/python -m pip install --quiet --no-compile -c constraints.txt -e ".[all]"
+	$(BIN)/python -m compileall -q -j 2 $$($(BIN)/python -c "import sysconfig; print(sysconfig.get_path('purelib'))") > /dev/null \
+		|| echo "note: some modules are left for Python to compile on import"
 	$(BIN)/python -m sideslip.warmup --jobs 2
 	touch $(STAMP)
 
@@ -30,13 +36,13 @@ browser:
 		     "(sudo apt-get install chromium, then make test-browser)"; \
 	fi
 
-# numba compiles each kernel on first use and caches it beside its source; two cold test
-# workers would each compile the same kernels (fresh clone: pytest 9:21 cold, 5:40 warm), so
-# they are compiled first, once, in two processes (sideslip.warmup; a few seconds when warm)
+# the kernels again after a source change (a few seconds when the cache is warm)
 warm: $(STAMP)
 	$(BIN)/python -m sideslip.warmup --jobs 2
 
-test: $(STAMP) browser warm
+# the install and the browser side by side (pip and apt each mostly wait on one core)
+test:
+	$(MAKE) --no-print-directory -j 2 $(STAMP) browser
 	$(BIN)/python -m pytest -q -n 2 --dist loadfile
 
 test-browser: $(STAMP)
