@@ -9,7 +9,15 @@ import pytest
 
 from sideslip.drive import drive_from_columns, load_drive
 from sideslip.frames import angle_diff, enu_to_geodetic, geodetic_to_enu, unwrap_angle, wrap_angle
-from sideslip.signals import gnss_course, hold, interpolate, reversing, standstill, vehicle_speed
+from sideslip.signals import (
+    gnss_course,
+    hold,
+    interpolate,
+    kernel_input,
+    reversing,
+    standstill,
+    vehicle_speed,
+)
 from tests.helpers import CIRCLE
 
 
@@ -105,3 +113,13 @@ def test_gravity_cue_reads_the_bank_of_a_straight_banked_road():
                                0.0, atol=1e-12)
     no_acc = drive_from_columns({k: v for k, v in cols.items() if k != "ay"}, {})
     assert gravity_lateral_sin(no_acc, vehicle_speed(no_acc), np.zeros(n)) is None
+
+
+def test_kernel_input_is_a_read_only_float64_view_that_leaves_the_source_writable():
+    source = np.arange(5.0)
+    view = kernel_input(source)
+    assert view.dtype == np.float64 and view.flags.c_contiguous and not view.flags.writeable
+    assert np.shares_memory(view, source) and source.flags.writeable
+    strided = kernel_input(np.arange(10, dtype=np.float32)[::2])
+    np.testing.assert_array_equal(strided, [0.0, 2.0, 4.0, 6.0, 8.0])
+    assert strided.dtype == np.float64 and strided.flags.c_contiguous

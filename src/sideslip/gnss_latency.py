@@ -225,7 +225,7 @@ def _huber_fit(X: FloatArray, y: FloatArray, per_baseline: float) -> tuple[Float
     beta = np.zeros(X.shape[1])
     scale = 0.0
     for _ in range(6):
-        beta, *_ = np.linalg.lstsq(X * w[:, None], y * w, rcond=None)
+        beta = np.asarray(np.linalg.lstsq(X * w[:, None], y * w, rcond=None)[0], dtype=float)
         resid = y - X @ beta
         scale = 1.4826 * float(np.median(np.abs(resid)))
         if scale <= 0.0:
@@ -233,7 +233,7 @@ def _huber_fit(X: FloatArray, y: FloatArray, per_baseline: float) -> tuple[Float
         w = np.sqrt(np.minimum(1.0, HUBER_K * scale / np.maximum(np.abs(resid), 1e-12)))
     xtx = (X * w[:, None]).T @ (X * w[:, None])
     try:
-        cov = scale**2 * np.linalg.inv(xtx) * per_baseline
+        cov = np.asarray(scale**2 * np.linalg.inv(xtx) * per_baseline, dtype=float)
     except np.linalg.LinAlgError:
         return None
     return beta, cov

@@ -398,3 +398,26 @@ def test_ekf_tuning_is_a_validated_frozen_dataclass_reached_by_name() -> None:
         est.params)
     assert est.series["health"].shape == drive.t.shape
     assert np.isfinite(est.innovations["gnss_nis"]).sum() > 100
+
+
+def test_the_filter_kernel_is_compiled_once_for_drives_from_a_file_and_from_memory(tmp_path):
+    """A parquet file's columns arrive read-only, a drive built in memory is writable: the
+    kernel gets read-only views of both (signals.kernel_input), so numba compiles one
+    specialisation, not one per mix (nine 4 s compiles in one test run before), and the
+    results are the same bit for bit."""
+    from sideslip.drive import load_drive, save_drive
+    from sideslip.methods.ekf_filter import ekf_loop
+
+    drive = sim_drive("demo")
+    vehicle = load_vehicle(drive.meta["vehicle"])
+    in_memory = drive_from_columns({k: np.array(drive[k]) for k in drive.columns()} | {"t": drive.t},
+                                   drive.meta)  # fmt: skip
+    path = tmp_path / "demo.parquet"
+    save_drive(drive, path)
+    from_file = load_drive(path)
+    before = set(ekf_loop.signatures) if ekf_loop.signatures else set()
+    results = [run_method(name, d, vehicle).series["beta"]
+               for d in (in_memory, from_file) for name in ("ekf_wss_sas", "ekf_wss_sas_imu")]  # fmt: skip
+    assert len(set(ekf_loop.signatures) - before) <= 1 and len(ekf_loop.signatures) >= 1
+    np.testing.assert_array_equal(results[0], results[2])
+    np.testing.assert_array_equal(results[1], results[3])

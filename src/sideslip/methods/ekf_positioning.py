@@ -377,8 +377,10 @@ def run_ekf(
     # the GNSS error and the position start fully correlated (position came from GNSS)
     P0[E, GE] = P0[GE, E] = -0.9 * consts.gnss_gm_std**2 if fixes.any() else 0.0
     P0[N, GN] = P0[GN, N] = P0[E, GE]
-    rows = [kernel_input(a) for a in (t, v_rl, v_rr, steer, wz, ge, gn, gstd)]
-    out = ekf_loop(*rows, x0, P0, consts)
+    out = ekf_loop(
+        kernel_input(t), kernel_input(v_rl), kernel_input(v_rr), kernel_input(steer),
+        kernel_input(wz), kernel_input(ge), kernel_input(gn), kernel_input(gstd), x0, P0, consts,
+    )  # fmt: skip
     return EkfResult(*out[:6], align, *out[6:])
 
 
