@@ -2,15 +2,16 @@
 
 Every hot loop of the toolkit is a numba kernel compiled on first use and cached beside its
 source (``cache=True``).  On a fresh install the first ``fused`` estimate spends about 55 s
-compiling, the simulator about 13 s, ``ekf_wss_sas`` and ``mkf`` about 14 s each (2 cores,
-measured 2026-12-03); later runs load the cache in well under a second.  Two processes that
-start cold each compile what they touch, so a test run on two workers, or a fleet run on a
-fresh cluster, pays for the same kernels twice.  :func:`warm_kernels` runs every registered
-method once on a short simulated drive, the methods split over ``jobs`` processes so that no
-kernel group is compiled twice, and leaves a warm cache behind.  With a warm cache it costs a
-few seconds.
+compiling, the simulator about 14 s, the ``fg_batch`` and ``ekf_wss_sas`` families about
+21 s each (one process, 2-core machine, measured 2026-12-03; :data:`FAMILIES`); later runs
+load the cache in well under a second.  Two processes that start cold each compile what they
+touch, so a test run on two workers, or a fleet run on a fresh cluster, pays for the same
+kernels twice.  :func:`warm_kernels` runs every registered method once on a short simulated
+drive, the methods split over ``jobs`` processes so that no kernel family is compiled twice,
+and leaves a warm cache behind.  With a warm cache it costs a few seconds.
 
-Run: ``python -m sideslip.warmup [--jobs N]`` (``make test`` and ``make demo`` do).
+Run: ``python -m sideslip.warmup [--jobs N]`` (the install of ``make`` does, before ``make demo``
+and ``make test``; ``make warm`` again after a source change).
 """
 
 from __future__ import annotations
