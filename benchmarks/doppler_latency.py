@@ -1,5 +1,6 @@
-"""A GNSS Doppler stamped late, and what the latency identified from its speed
-(``sideslip.gnss_latency.identify_doppler_latency``) does for ``fused``.
+"""A GNSS Doppler stamped late, and what the latency identified from it
+(``sideslip.gnss_latency.identify_doppler_latency``: its speed against the wheels and its
+course rate against the lateral accelerometer) does for ``fused``.
 
 Every scenario's own receiver (fixes and Doppler, 10 Hz unless the scenario says otherwise),
 each epoch reporting the truth 0 / 0.05 / 0.1 s before its stamp, as from a logger that
@@ -7,8 +8,9 @@ stamps messages on arrival.  Right vehicle file, seed 0; beta RMSE in degrees on
 than 5 m/s, with the share of beta errors inside 2 beta_std in brackets.  "off": fused with
 ``identify_doppler_latency=false`` (the epochs taken at their stamps); "on": the default,
 which takes each epoch at its stamp less the identified latency where the fit is decisive
-(1-sigma at most 15 ms) and late by over 3 sigma.  fg_batch uses no Doppler; doppler_slip
-takes the epochs at their stamps.
+(1-sigma at most 15 ms) and late by over 3 sigma; where it informs but does not decide, |r|
+times the latency's rms about 0 (the fit with the prior N(0, 0.05 s)) enters beta_std.
+fg_batch uses no Doppler; doppler_slip takes the epochs at their stamps.
 Writes ``benchmarks/results/doppler_latency.md``.
 Run: ``.venv/bin/python benchmarks/doppler_latency.py [--scenario S ...]``.
 """

@@ -95,11 +95,45 @@ def test_doppler_latency_is_found_from_its_speed_against_the_wheels(latency_s: f
     assert abs(found.latency_s - latency_s) < 2.5 * found.sigma_s
 
 
-def test_doppler_latency_of_a_constant_speed_drive_is_not_decided() -> None:
-    """step_steer at 80 km/h: the Doppler speed never leads or lags the wheels (measured
-    sigma of hundreds of seconds)."""
+def test_one_turn_at_constant_speed_informs_the_doppler_latency_but_does_not_decide_it() -> None:
+    """step_steer at 80 km/h: the Doppler speed never leads or lags the wheels (speed fit: a
+    sigma of hundreds of seconds); its one turn gives the course-rate fit +0.098 +- 0.066 s
+    for the true 0.1 s.  Both are kept, the combination is the course rate's, and its sigma
+    stays above fused's 15 ms threshold for moving the epochs."""
     found = identify_doppler_latency(doppler_drive("step_steer", 0.1))
-    assert found is None or found.sigma_s > 1.0
+    assert found is not None
+    assert found.speed_sigma_s > 1.0
+    assert found.latency_s == pytest.approx(found.lateral_s, abs=1e-4)
+    assert 0.015 < found.sigma_s < 0.15
+    assert abs(found.latency_s - 0.1) < 2.5 * found.sigma_s
+
+
+@pytest.mark.parametrize("latency_s", [0.0, 0.1])
+def test_a_slalom_at_constant_speed_decides_the_doppler_latency_by_its_turns(latency_s: float) -> None:
+    """slalom_low_mu (one speed, 0.5 Hz steering): the speed fit cannot tell (sigma of hours),
+    the course rate against the lateral accelerometer decides (measured +0.002 / +0.103 +-
+    0.014-0.016 s for the true 0 / 0.1 s); 2.5 sigma and fused's 15 ms threshold (20 ms here:
+    the threshold applies to the combination, which has the same sigma)."""
+    found = identify_doppler_latency(doppler_drive("slalom_low_mu", latency_s))
+    assert found is not None
+    assert found.speed_sigma_s > 1.0
+    assert found.sigma_s < 0.02
+    assert abs(found.latency_s - latency_s) < 2.5 * found.sigma_s
+
+
+def test_contradicting_doppler_fits_widen_the_combined_sigma(monkeypatch) -> None:
+    """Speed fit 0.00 +- 0.01 s and course-rate fit 0.10 +- 0.01 s: the inverse-variance mean
+    0.05 s with sigma 0.01 / sqrt(2), times the Birge ratio sqrt(chi^2) = 0.1 / (0.01 sqrt(2)),
+    i.e. 0.05 s: the two fits together no longer decide the latency."""
+    from sideslip import doppler_latency_lateral, gnss_latency
+
+    monkeypatch.setattr(gnss_latency, "_doppler_latency_from_speed", lambda drive: LatencyEstimate(0.0, 0.01, 1.0, 500))
+    monkeypatch.setattr(doppler_latency_lateral, "lateral_doppler_latency", lambda drive, *geometry: (0.1, 0.01, 1.0))
+    found = identify_doppler_latency(doppler_drive("demo", 0.0))
+    assert found is not None
+    assert found.latency_s == pytest.approx(0.05)
+    assert found.sigma_s == pytest.approx(0.05)
+    assert (found.speed_s, found.lateral_s) == (0.0, 0.1)
 
 
 def test_no_doppler_latency_without_doppler() -> None:

@@ -50,7 +50,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from sideslip import gnss
+from sideslip import doppler_latency_lateral, gnss
 from sideslip.drive import Drive
 from sideslip.signals import vehicle_speed
 from sideslip.vehicle import G
@@ -84,6 +84,12 @@ class LatencyEstimate:
     fixes: int
     lever_y_m: float = 0.0  # the antenna's lateral lever arm, m left of the centreline
     lever_y_sigma_m: float = math.inf  # its 1-sigma (inf: the drive did not turn)
+    # the Doppler's two fits (identify_doppler_latency): speed against the wheels, course rate
+    # against the lateral accelerometer; NaN / inf where that fit has no estimate
+    speed_s: float = math.nan
+    speed_sigma_s: float = math.inf
+    lateral_s: float = math.nan
+    lateral_sigma_s: float = math.inf
 
     def lever_y_posterior(self, prior_m: float, prior_sigma_m: float) -> tuple[float, float]:
         """The antenna's lateral lever arm (m) and its 1-sigma from this estimate and a prior
@@ -169,19 +175,53 @@ def identify_latency(drive: Drive) -> LatencyEstimate | None:
     )
 
 
-def identify_doppler_latency(drive: Drive) -> LatencyEstimate | None:
+def identify_doppler_latency(
+    drive: Drive, lever_x_m: float = 0.0, lever_z_m: float = 0.0, lr_m: float = 0.0
+) -> LatencyEstimate | None:
     """The latency of the GNSS Doppler velocity (s: an epoch stamped at t reports the velocity
-    at t - tau) from its speed against the wheels', the fixes' model above without the chord
-    (a Doppler velocity is the antenna's at its epoch) and without the lever arm, over the
-    epochs above :data:`MIN_SPEED_M_S` whose speed changes slower than
+    at t - tau), from two tyre-free fits combined: its speed against the wheels'
+    (:func:`_doppler_latency_from_speed`) and its course rate against the lateral accelerometer
+    (:func:`sideslip.doppler_latency_lateral.lateral_doppler_latency`; ``lever_x_m``,
+    ``lever_z_m`` the antenna ahead of and above the IMU, ``lr_m`` the CG to the rear axle,
+    m).  The first needs speed changes, the second turns; each carries its own sigma and both
+    are in the result (``speed_*``, ``lateral_*``).  Combined by their inverse variances;
+    where they disagree beyond their sigmas (chi^2 of the difference above 1) the combined
+    sigma grows by sqrt(chi^2) (Birge ratio), so two fits that contradict each other do not
+    decide the latency.  None where neither fit has an estimate.
+
+    Measured (simulator, seed 0, 10 Hz Doppler 0 / 50 / 100 ms late), speed fit: urban_course
+    +0.005 / +0.055 / +0.106 +- 0.006 s, demo +0.000 / +0.051 / +0.101 +- 0.010,
+    suburban_outages -0.008 / +0.043 / +0.093 +- 0.005; race_lap, urban_highway and drives at
+    constant speed a sigma of 0.05 s to hours.  The lateral fit decides race_lap (+- 0.006 s),
+    slalom_low_mu, cr_slalom and cr_limit_slalom (+- 0.011-0.016 s) and dlc_bank (+- 0.024 s)."""
+    speed_fit = _doppler_latency_from_speed(drive)
+    lateral = doppler_latency_lateral.lateral_doppler_latency(drive, lever_x_m, lever_z_m, lr_m)
+    if lateral is None:
+        return speed_fit
+    lat_s, lat_sigma, _ = lateral
+    if speed_fit is None or not math.isfinite(speed_fit.sigma_s) or speed_fit.sigma_s <= 0.0:
+        fixes = 0 if speed_fit is None else speed_fit.fixes
+        scale = 1.0 if speed_fit is None else speed_fit.wheel_scale
+        return LatencyEstimate(lat_s, lat_sigma, scale, fixes, lateral_s=lat_s, lateral_sigma_s=lat_sigma)
+    w_speed, w_lat = 1.0 / speed_fit.sigma_s**2, 1.0 / lat_sigma**2
+    mean = (w_speed * speed_fit.latency_s + w_lat * lat_s) / (w_speed + w_lat)
+    sigma = 1.0 / math.sqrt(w_speed + w_lat)
+    chi2 = (speed_fit.latency_s - lat_s) ** 2 / (speed_fit.sigma_s**2 + lat_sigma**2)
+    sigma *= math.sqrt(max(chi2, 1.0))
+    return LatencyEstimate(
+        float(mean), float(sigma), speed_fit.wheel_scale, speed_fit.fixes,
+        speed_s=speed_fit.latency_s, speed_sigma_s=speed_fit.sigma_s,
+        lateral_s=lat_s, lateral_sigma_s=lat_sigma,
+    )  # fmt: skip
+
+
+def _doppler_latency_from_speed(drive: Drive) -> LatencyEstimate | None:
+    """The Doppler's latency from its speed against the wheels', the fixes' model above without
+    the chord (a Doppler velocity is the antenna's at its epoch) and without the lever arm, over
+    the epochs above :data:`MIN_SPEED_M_S` whose speed changes slower than
     :data:`DOPPLER_MAX_RATE_M_S2`.  The wheels are the clock: a latency of the wheel or CAN
     speed comes out with the opposite sign.  None without Doppler, a speed signal or
-    :data:`MIN_FIXES` such epochs.
-
-    Measured (simulator, seed 0, 10 Hz Doppler 0 / 50 / 100 ms late): urban_course +0.005 /
-    +0.055 / +0.106 +- 0.006 s, demo +0.000 / +0.051 / +0.101 +- 0.010, suburban_outages
-    -0.008 / +0.043 / +0.093 +- 0.005; race_lap, urban_highway and drives at constant speed a
-    sigma of 0.05 s to hours (they do not inform it)."""
+    :data:`MIN_FIXES` such epochs."""
     if "gnss_ve" not in drive or "gnss_vn" not in drive:
         return None
     dop = gnss.doppler_samples(drive)
@@ -214,7 +254,8 @@ def identify_doppler_latency(drive: Drive) -> LatencyEstimate | None:
     var_tau = float(cov[1, 1])
     if not (math.isfinite(k) and k > 0.5 and math.isfinite(var_tau) and var_tau >= 0.0):
         return None
-    return LatencyEstimate(float(beta[1]) / k, math.sqrt(var_tau) / k, k, int(use.sum()))
+    tau, sigma = float(beta[1]) / k, math.sqrt(var_tau) / k
+    return LatencyEstimate(tau, sigma, k, int(use.sum()), speed_s=tau, speed_sigma_s=sigma)
 
 
 def _huber_fit(X: FloatArray, y: FloatArray, per_baseline: float) -> tuple[FloatArray, FloatArray] | None:

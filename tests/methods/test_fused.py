@@ -122,10 +122,12 @@ def test_fused_beats_every_paper_method_on_banks_and_at_the_limit(scenario):
 def test_beta_std_covers_the_error(scenario, factor):
     """Calibration: a Gaussian 2-sigma covers 95 % of errors.  At least 90 % inside 2 sigma,
     also at the limit (race_lap) and on CommonRoad drives with a 30 %-off file, and sigma not
-    more than 7x the actual RMS error (measured: 98.7 % on race_lap, 99.8-100 % elsewhere;
-    RMS sigma / RMS error 1.3 on cr_circle .. 6.6 on demo, where the tyre-relaxation term of
-    beta_std is wide against a beta pinned by GNSS and the identified axle noise: 5.6 at most
-    before FusedSettings.adapt_min, when demo's error was 0.022 deg instead of 0.013)."""
+    more than 9x the actual RMS error (measured: 99.8-100 %; RMS sigma / RMS error 2.8 on
+    race_lap .. 8.4 on cr_step_steer).  What widens sigma most against these on-time drives is
+    a Doppler latency they cannot decide (one turn at one speed: |r| x the latency's rms about
+    0 from the 50 ms prior and the fits, 8.4 on cr_step_steer and 5.4 on cr_circle; 6.0 and
+    3.6 with a 30 ms prior, which left step_steer 100 ms late with 18 % inside 2 sigma) and
+    the tyre-relaxation term where GNSS pins beta (demo 4.8, urban_course 6.1)."""
     drive = sim_drive(scenario)
     v = load_vehicle(drive.meta["vehicle"])
     est = fuse(drive, v.with_changes(cf=factor * v.cf, cr=factor * v.cr), smooth=True)
@@ -133,7 +135,7 @@ def test_beta_std_covers_the_error(scenario, factor):
     err = np.abs(wrap_angle(est["beta"] - drive["ref_beta"]))[gate]
     std = est["beta_std"][gate]
     assert two_sigma_share(drive, est) > 0.90
-    assert np.sqrt(np.mean(std**2)) < 7 * np.sqrt(np.mean(err**2))
+    assert np.sqrt(np.mean(std**2)) < 9 * np.sqrt(np.mean(err**2))
 
 
 def test_rear_stiffness_is_identified_from_a_wrong_vehicle_file():
@@ -288,16 +290,17 @@ def test_a_drive_that_starts_from_rest_and_reverses(smooth):
         ((0.05, 0.005), 0.05, math.hypot(0.005, 0.01)),  # decisive and late: applied
         ((0.015, 0.004), 0.0, 0.015),  # the 1 h bench drive on time: within the fit's errors
         ((-0.08, 0.005), 0.0, 0.08),  # the wheels' clock late (a filtered CAN speed)
-        ((0.1, 0.05), 0.0, 0.03),  # not decided (race lap, constant speed): the prior
+        ((0.1, 0.05), 0.0, math.hypot(0.05, 0.05 / math.sqrt(2))),  # informs, does not decide
+        ((-3.0, 900.0), 0.0, 0.05),  # tells nothing (one turn at constant speed): the prior
     ],
 )
 def test_doppler_latency_is_applied_only_where_the_drive_decides_it(monkeypatch, found, used, sigma):
     """fused._doppler_latency's choice from the tyre-free fit: the latency the epochs are taken
-    with and the sigma whose |r| multiple enters beta_std (0.03 s: the prior's default)."""
+    with and the sigma whose |r| multiple enters beta_std (0.05 s: the prior's default)."""
     from sideslip.gnss_latency import LatencyEstimate
     from sideslip.methods import fused
 
-    monkeypatch.setattr(fused, "identify_doppler_latency", lambda drive: LatencyEstimate(*found, 1.0, 500))
+    monkeypatch.setattr(fused, "identify_doppler_latency", lambda drive, *geometry: LatencyEstimate(*found, 1.0, 500))
     params: dict[str, object] = {}
     tau, sig = fused._doppler_latency(sim_drive("demo"), FusedSettings(), params)
     assert tau == pytest.approx(used)
@@ -305,3 +308,36 @@ def test_doppler_latency_is_applied_only_where_the_drive_decides_it(monkeypatch,
     assert params["gnss_doppler_latency_s"] == pytest.approx(used)
     off = FusedSettings(identify_doppler_latency=False)
     assert fused._doppler_latency(sim_drive("demo"), off, {}) == (0.0, 0.0)
+
+
+def test_a_late_doppler_at_the_limit_is_taken_at_the_latency_its_turns_reveal() -> None:
+    """cr_limit_slalom (CommonRoad's multi-body truth, one speed, beta to 5 deg) with every
+    GNSS epoch 100 ms late: the wheels cannot time the Doppler, its course rate against the
+    lateral accelerometer can (measured +0.091 +- 0.008 s), and fused takes the epochs that
+    much earlier: beta RMSE 0.266 deg (0.449 with the epochs at their stamps, 0.229 on time).
+    Bounds: the latency within 0.03 s (3.5 sigma) and beta within 0.35 deg, closer to the
+    on-time run than to the stamped one."""
+    from tests.test_gnss_latency import doppler_drive
+
+    drive = doppler_drive("cr_limit_slalom", 0.1)
+    vehicle = load_vehicle(drive.meta["vehicle"])
+    est = run_method("fused", drive, vehicle)
+    assert est.params["gnss_doppler_latency_s"] == pytest.approx(0.1, abs=0.03)
+    assert est.params["gnss_doppler_latency_lateral_fit_s"][1] < 0.015
+    assert metrics(drive, est.series)["beta_rmse_deg"] < 0.35
+    assert two_sigma_share(drive, est) > 0.9
+
+
+def test_a_late_doppler_the_drive_cannot_time_widens_beta_std_in_the_turn() -> None:
+    """step_steer at one speed, 100 ms late: one turn informs the latency (+0.10 +- 0.06 s)
+    but does not decide it, so the epochs stay at their stamps and beta is about r x 0.1 s
+    (1 deg) off in the turn; beta_std carries |r| times the latency's rms about 0 (0.054 s:
+    the fit with the 50 ms prior), so the errors stay inside 2 sigma (measured 100 %; 18 %
+    with a 30 ms prior alone)."""
+    from tests.test_gnss_latency import doppler_drive
+
+    drive = doppler_drive("step_steer", 0.1)
+    est = run_method("fused", drive, load_vehicle(drive.meta["vehicle"]))
+    assert est.params["gnss_doppler_latency_s"] == 0.0
+    assert metrics(drive, est.series)["beta_rmse_deg"] > 0.5  # the lag is there ...
+    assert two_sigma_share(drive, est) > 0.9  # ... and beta_std says so

@@ -295,33 +295,49 @@ DOPPLER_LATENCY_MIN_Z = 3.0  # ... and this many sigma above 0 (receivers are la
 DOPPLER_LATENCY_FLOOR_S = 0.01
 
 
-def _doppler_latency(drive: Drive, nz: FusedSettings, params: dict[str, Any]) -> tuple[float, float]:
+def _doppler_latency(
+    drive: Drive, nz: FusedSettings, params: dict[str, Any], geometry: tuple[float, ...] = (0.0, 0.0, 0.0)
+) -> tuple[float, float]:
     """The GNSS Doppler's latency (s) the epochs are taken with, and the 1-sigma of what may
-    remain: the tyre-free fit of :func:`sideslip.gnss_latency.identify_doppler_latency` where
-    it is decisive (sigma at most :data:`DOPPLER_LATENCY_MAX_SIGMA_S`) and late by more than
+    remain: the tyre-free fits of :func:`sideslip.gnss_latency.identify_doppler_latency` (speed
+    against the wheels, course rate against the lateral accelerometer; ``geometry`` the antenna
+    ahead of and above the IMU and the CG's distance to the rear axle, m) where they decide it (sigma at most
+    :data:`DOPPLER_LATENCY_MAX_SIGMA_S`) and it is late by more than
     :data:`DOPPLER_LATENCY_MIN_Z` sigma (the fit's, with :data:`DOPPLER_LATENCY_FLOOR_S`), with
     that sigma; a decisive fit that is not late leaves 0 with the larger of the sigma and the
-    fit's value; otherwise 0 with ``doppler_latency_prior_sigma_s`` (the drive cannot tell,
-    so beta_std carries r times it).  ``(0, 0)`` when switched off.
+    fit's value.  Otherwise the epochs stay at their stamps and the sigma is the root mean
+    square of the latency about 0 under the fit combined with the prior
+    N(0, ``doppler_latency_prior_sigma_s``): the prior's sigma where the drive tells nothing,
+    up to about the fit's value where it tells something but not enough to move the epochs
+    (slalom_low_mu 100 ms late: +0.103 +- 0.016 s, kept at 0 with sigma 0.078 s).  ``(0, 0)``
+    when switched off.
 
     A Doppler velocity stamped tau late lags the heading by r tau, which in a turn reads as
     sideslip: 50 ms cost step_steer 0.034 -> 0.445 deg beta RMSE with 19 % inside 2 sigma,
     urban_course 0.037 -> 0.336 (fused_accuracy.md).  The guards keep a fit that the drive
-    does not inform from moving the epochs: race_lap (limit slip) and urban_highway (few
-    speed changes) read +0.04 to +0.3 s at a true 0, with sigmas of 0.05-0.15 s; a negative
-    value means the wheels' clock is late (a filtered CAN speed), not the receiver's."""
+    does not inform from moving the epochs: the speed fit alone read race_lap (limit slip) and
+    urban_highway (few speed changes) +0.04 to +0.3 s at a true 0, with sigmas of 0.05-0.15 s;
+    a negative value means the wheels' clock is late (a filtered CAN speed), not the
+    receiver's."""
     if not nz.identify_doppler_latency or "gnss_ve" not in drive:
         return 0.0, 0.0
-    est = identify_doppler_latency(drive)
+    est = identify_doppler_latency(drive, *geometry)
+    prior = nz.doppler_latency_prior_sigma_s
     if est is None:
-        params["gnss_doppler_latency_note"] = "not identified: under 100 epochs above 3 m/s with a speed"
-        return 0.0, nz.doppler_latency_prior_sigma_s
+        params["gnss_doppler_latency_note"] = "not identified: too few epochs above 3 m/s"
+        return 0.0, prior
     params["gnss_doppler_latency_identified_s"] = est.latency_s
     params["gnss_doppler_latency_identified_sigma_s"] = est.sigma_s
+    fits = {"speed": (est.speed_s, est.speed_sigma_s), "lateral": (est.lateral_s, est.lateral_sigma_s)}
+    for key, (value, sigma) in fits.items():
+        if math.isfinite(value) and math.isfinite(sigma):  # [latency, 1-sigma] of each fit
+            params[f"gnss_doppler_latency_{key}_fit_s"] = [value, sigma]
     params["gnss_doppler_latency_s"] = 0.0
     if est.sigma_s > DOPPLER_LATENCY_MAX_SIGMA_S:
         params["gnss_doppler_latency_note"] = "not applied: the drive does not decide it"
-        return 0.0, nz.doppler_latency_prior_sigma_s
+        if prior <= 0.0:
+            return 0.0, 0.0
+        return 0.0, math.hypot(est.posterior_mean(prior), est.posterior_sigma(prior))
     sigma = math.hypot(est.sigma_s, DOPPLER_LATENCY_FLOOR_S)
     if est.latency_s < DOPPLER_LATENCY_MIN_Z * sigma:
         params["gnss_doppler_latency_note"] = "not applied: not late beyond the fit's errors"
@@ -433,7 +449,10 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     # only is taken as driving forwards (GNSS then disagrees, and the Huber weights limit harm)
     vw = np.full(n, np.nan) if raw is None else raw
     dop_params: dict[str, Any] = {}
-    doppler_latency = _doppler_latency(drive, nz, dop_params)
+    # the antenna ahead of and above the IMU, and the rear axle behind the CG (m)
+    ahead, above = (g - i for g, i in zip(vehicle.gnss_xyz[::2], vehicle.imu_xyz[::2], strict=True))
+    geometry = (ahead, above, vehicle.lr)
+    doppler_latency = _doppler_latency(drive, nz, dop_params, geometry)
     gn = _gnss(drive, nz, doppler_latency[0])
     has_pos, has_vel = bool(gn["has_pos"]), bool(gn["has_vel"])
     # latency and lever arm: identified on positions-only drives; with Doppler the file's

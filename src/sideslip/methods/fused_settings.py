@@ -154,10 +154,12 @@ class FusedSettings:
     # (fused._doppler_latency); the epochs are then taken at their stamp less it, by the
     # causal filter too (a calibration of the receiver, read from the whole drive)
     identify_doppler_latency: bool = True
-    # 1-sigma (s) of a Doppler latency the drive does not decide (constant speed, the limit):
-    # a logger that stamps the receiver's messages on arrival is 50-100 ms late; r times it
-    # enters beta_std
-    doppler_latency_prior_sigma_s: float = 0.03
+    # 1-sigma (s) of the prior on a Doppler latency the drive does not decide (few speed
+    # changes and few turns): a logger that stamps the receiver's messages on arrival is
+    # 50-100 ms late; r times the latency's rms about 0 (this prior with the drive's fits,
+    # fused._doppler_latency) enters beta_std.  0.03 s left step_steer 100 ms late with 20 %
+    # of its errors inside 2 sigma (doppler_latency.md)
+    doppler_latency_prior_sigma_s: float = 0.05
     # positions only: how long one unidentified latency / lever-arm offset of the fixes lasts
     # for the noise model (its variance times the fixes in this span, at least one: a span
     # shorter than the fix interval counts it as white)
