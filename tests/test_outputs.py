@@ -296,3 +296,30 @@ def test_interrupt_leaves_no_output_and_no_temp_file(tmp_path, long_drive, sig, 
     assert left in ([], ["est.csv", "est.meta.json", "est.params.json"]), left
     if left:
         assert len(pd.read_csv(out_dir / "est.csv")) == len(pd.read_parquet(long_drive))
+
+
+def test_a_signal_another_thread_takes_is_held_until_the_section_ends():
+    """The kernel hands a process-directed SIGTERM to any thread that does not block it (numpy's
+    and pyarrow's pools), and CPython then runs the handler in the main thread at its next
+    instruction: blocking the signal in the main thread alone let it interrupt a held section
+    (an unrecorded .part file left behind).  Here another thread takes the signal inside the
+    section; the handler must defer it to the section's end."""
+    from sideslip.outputs import Interrupted, _signals_held, install_signal_handlers
+
+    saved = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)}
+    release = threading.Event()
+    helper = threading.Thread(target=release.wait, daemon=True)  # started with no signal blocked
+    helper.start()
+    try:
+        install_signal_handlers()
+        inside = []
+        with pytest.raises(Interrupted) as raised, _signals_held():
+            signal.pthread_kill(helper.ident, signal.SIGTERM)
+            time.sleep(0.05)  # the handler has run by now (in this, the main thread)
+            inside.append("reached the end of the section")
+        assert inside == ["reached the end of the section"]
+        assert raised.value.signum == signal.SIGTERM
+    finally:
+        release.set()
+        for sig, handler in saved.items():
+            signal.signal(sig, handler)

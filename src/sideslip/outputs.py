@@ -15,9 +15,17 @@ Writes inside :func:`output_group` become visible together when the group ends (
 its ``.params.json`` / ``.meta.json`` side-cars), or not at all.  :func:`check_outputs` runs
 before any method: an output naming one of the command's inputs (also through a link or a hard
 link), a folder where a file is expected (or the reverse) and a folder that cannot be written
-are one :class:`InputError` line each.  :func:`install_signal_handlers` turns SIGTERM (and
-SIGHUP) into :class:`Interrupted`, a ``KeyboardInterrupt``, so temporary files are removed on
-the way out exactly as for Ctrl-C.
+are one :class:`InputError` line each.  :func:`install_signal_handlers` turns SIGINT, SIGTERM
+and SIGHUP into :class:`Interrupted`, a ``KeyboardInterrupt``, so temporary files are removed
+on the way out exactly as for Ctrl-C.
+
+Creating a temporary file and recording it (and deleting it and forgetting it, and the final
+renames) happen with signals held: :func:`_signals_held` blocks them in the calling thread and
+also makes the Python-level handler defer them until the section ends.  Blocking alone is not
+enough: the process has other threads (numpy's BLAS and pyarrow's pools), the kernel hands a
+process-directed signal to one of those, and CPython then runs the handler in the main thread
+at its next instruction, inside the section (a SIGTERM right after ``mkstemp`` left an
+unrecorded ``.part`` file behind).
 """
 
 from __future__ import annotations
@@ -52,15 +60,43 @@ class Interrupted(KeyboardInterrupt):
         self.signum = signum
 
 
+_HELD_SIGNALS = {signal.SIGINT, signal.SIGTERM, signal.SIGHUP}
+_HOLD = [0]  # depth of nested _signals_held sections
+_PENDING: list[int] = []  # signals that arrived while held, raised when the section ends
+
+
 def _on_signal(signum: int, _frame: FrameType | None) -> None:
+    if _HOLD[0]:
+        _PENDING.append(signum)
+        return
     raise Interrupted(signum)
 
 
 def install_signal_handlers() -> None:
-    """SIGTERM and SIGHUP raise :class:`Interrupted` (SIGINT already raises KeyboardInterrupt)."""
-    for sig in (signal.SIGTERM, signal.SIGHUP):
+    """SIGINT, SIGTERM and SIGHUP raise :class:`Interrupted` (a ``KeyboardInterrupt``; exit
+    status 128 + signal), deferred while a :func:`_signals_held` section runs.  A signal the
+    process was started ignoring (``nohup``, a shell's background job) stays ignored."""
+    for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
         with contextlib.suppress(ValueError, OSError):  # not the main thread / not supported
-            signal.signal(sig, _on_signal)
+            if signal.getsignal(sig) is not signal.SIG_IGN:  # nohup, a background job: kept
+                signal.signal(sig, _on_signal)
+
+
+@contextlib.contextmanager
+def _signals_held() -> Iterator[None]:
+    """Run the block with SIGINT, SIGTERM and SIGHUP held (module docstring); one that came in
+    the meantime is raised as :class:`Interrupted` when the outermost section ends."""
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, _HELD_SIGNALS)
+    _HOLD[0] += 1
+    try:
+        yield
+    finally:
+        _HOLD[0] -= 1
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+        if not _HOLD[0] and _PENDING:
+            signum = _PENDING[0]
+            _PENDING.clear()
+            raise Interrupted(signum)
 
 
 def remove_temps() -> None:
@@ -106,31 +142,21 @@ def _write_stdout(write: Writer) -> None:
         _LIVE_TEMPS.discard(tmp)
 
 
-_HELD_SIGNALS = {signal.SIGINT, signal.SIGTERM, signal.SIGHUP}
-
-
 def _registered_temp(folder: str, prefix: str) -> tuple[int, str]:
     """A temporary file in ``folder``, registered for clean-up before any signal can land:
     a SIGINT/SIGTERM between creating the file and recording it would leave it behind."""
-    old = signal.pthread_sigmask(signal.SIG_BLOCK, _HELD_SIGNALS)
-    try:
+    with _signals_held():
         fd, tmp = tempfile.mkstemp(dir=folder, prefix=prefix, suffix=".part")
         _LIVE_TEMPS.add(tmp)
-    finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, old)
     return fd, tmp
 
 
 def _drop_temp(tmp: str) -> None:
     """Delete a temporary file and forget it, with signals held (a second signal during the
     clean-up of the first would otherwise leave the file behind, unregistered)."""
-    old = signal.pthread_sigmask(signal.SIG_BLOCK, _HELD_SIGNALS)
-    try:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
-        _LIVE_TEMPS.discard(tmp)
-    finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+    with _signals_held(), contextlib.suppress(OSError):
+        os.unlink(tmp)
+    _LIVE_TEMPS.discard(tmp)
 
 
 def atomic_write(path: PathLike, write: Writer) -> None:
@@ -184,13 +210,10 @@ def output_group() -> Iterator[None]:
     _GROUP.append(pending)
     try:
         yield
-        old = signal.pthread_sigmask(signal.SIG_BLOCK, _HELD_SIGNALS)
-        try:
+        with _signals_held():
             for tmp, real in pending:
                 os.replace(tmp, real)
                 _LIVE_TEMPS.discard(tmp)
-        finally:
-            signal.pthread_sigmask(signal.SIG_SETMASK, old)
     finally:
         _GROUP.pop()
         for tmp, _ in pending:
@@ -217,16 +240,14 @@ def _check_folder_writable(shown: str, folder: str) -> None:
     base = _first_existing(folder)
     if not os.path.isdir(base):
         raise InputError(shown, f"{base} is a file, not a folder: expected a path in a writable folder")
-    old = signal.pthread_sigmask(signal.SIG_BLOCK, _HELD_SIGNALS)  # never left behind
     try:
-        fd, probe = tempfile.mkstemp(dir=base, prefix=".sideslip-probe.")
-        os.close(fd)
-        os.unlink(probe)
+        with _signals_held():  # never left behind
+            fd, probe = tempfile.mkstemp(dir=base, prefix=".sideslip-probe.")
+            os.close(fd)
+            os.unlink(probe)
     except OSError as exc:
         raise InputError(shown, f"cannot write in {base} ({exc.strerror or exc}): expected a writable "
                          "folder") from None
-    finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, old)
 
 
 def check_writable(path: PathLike, *, folder: bool = False) -> None:
