@@ -100,6 +100,9 @@ def test_no_estimate_without_doppler_or_turns_enough() -> None:
     assert lateral_doppler_latency(without(drive, "gnss_ve", "gnss_vn")) is None
     assert lateral_doppler_latency(without(drive, "ay")) is None
     assert lateral_doppler_latency(drive.slice(0, 400)) is None  # 4 s: under 50 epochs
+    # reversing (negative wheel and CAN speeds) throughout: the path's left is the body's right
+    backwards = {k: -v if k.startswith("v_") else v for k, v in drive.data.items()}
+    assert lateral_doppler_latency(Drive(drive.t, backwards, drive.meta, drive.path)) is None
     # a 1 Hz receiver (suburban_outages' own): its 2 s spans are left to the speed fit
     assert lateral_doppler_latency(late_drive("suburban_outages", 0.0)) is None
 

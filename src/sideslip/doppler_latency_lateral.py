@@ -48,6 +48,7 @@ these by -0.005 to -0.017 s and halves cr_limit_slalom's sigma (0.015 without it
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 from numpy.typing import NDArray
@@ -55,6 +56,7 @@ from numpy.typing import NDArray
 from sideslip import gnss
 from sideslip.drive import Drive
 from sideslip.frames import wrap_angle
+from sideslip.signals import reversing
 from sideslip.vehicle import G
 
 FloatArray = NDArray[np.float64]
@@ -76,9 +78,31 @@ ROLL_SEGMENT_S = 120.0  # the integrated roll gyro's offset and drift: one pair 
 HUBER_K = 1.5  # Huber threshold, in robust sigmas of the residual
 
 
-def _span_mean(t: FloatArray, cum: FloatArray, lo: FloatArray, hi: FloatArray) -> FloatArray:
-    """Mean over ``[lo, hi]`` of the signal whose running integral on ``t`` is ``cum``."""
-    return np.asarray((np.interp(hi, t, cum) - np.interp(lo, t, cum)) / (hi - lo), dtype=float)
+Lookup = Callable[[FloatArray, FloatArray], FloatArray]
+
+
+def _lookup(t: FloatArray) -> Lookup:
+    """``f(q, values)``: ``values`` (sampled on ``t``) linearly interpolated at the times ``q``,
+    held at the ends (as ``np.interp``).  On a uniform time base (the usual logger) the index
+    is computed, not searched: four times faster on an hour's drive."""
+    step = (t[-1] - t[0]) / max(t.size - 1, 1)
+    if t.size < 2 or step <= 0.0 or np.max(np.abs(np.diff(t) - step)) > 1e-6 * step:
+        return lambda q, values: np.interp(q, t, values)
+    last = t.size - 1
+
+    def uniform(q: FloatArray, values: FloatArray) -> FloatArray:
+        pos = np.clip((q - t[0]) / step, 0.0, float(last))
+        i = np.minimum(pos.astype(np.intp), last - 1)
+        frac = pos - i
+        return values[i] * (1.0 - frac) + values[i + 1] * frac
+
+    return uniform
+
+
+def _span_mean(at: Lookup, cum: FloatArray, lo: FloatArray, hi: FloatArray) -> FloatArray:
+    """Mean over ``[lo, hi]`` of the signal whose running integral is ``cum`` (``at``: its
+    :func:`_lookup`)."""
+    return np.asarray((at(hi, cum) - at(lo, cum)) / (hi - lo), dtype=float)
 
 
 def _running_integral(t: FloatArray, values: FloatArray) -> FloatArray:
@@ -92,28 +116,29 @@ def _within(values: FloatArray, w: FloatArray, seg: IntArray, ramp: FloatArray |
     constant (and the ``ramp`` where given): the nuisance regressors taken out by
     Frisch-Waugh-Lovell, so that a long drive's per-segment offsets cost O(n), not an (n x
     2 segments) design matrix."""
+    m = values.shape[1]
     nseg = int(seg.max()) + 1
+    cells = (seg[:, None] + nseg * np.arange(m)[None, :]).ravel()
 
-    def total(x: FloatArray) -> FloatArray:
+    def per_segment(x: FloatArray) -> FloatArray:  # (n,) -> (nseg,)
         return np.asarray(np.bincount(seg, weights=x, minlength=nseg), dtype=float)
 
-    s0 = total(w)
-    out = np.empty_like(values)
-    for c in range(values.shape[1]):
-        v = values[:, c]
-        if ramp is None:
-            mean = total(w * v) / np.maximum(s0, 1e-300)
-            out[:, c] = v - mean[seg]
-            continue
-        s1, s2 = total(w * ramp), total(w * ramp * ramp)
-        sv, srv = total(w * v), total(w * ramp * v)
-        det = s0 * s2 - s1 * s1
-        ok = det > 1e-12 * np.maximum(s0 * s2, 1e-300)
-        safe = np.where(ok, det, 1.0)
-        a = np.where(ok, (s2 * sv - s1 * srv) / safe, sv / np.maximum(s0, 1e-300))
-        b = np.where(ok, (s0 * srv - s1 * sv) / safe, 0.0)
-        out[:, c] = v - a[seg] - b[seg] * ramp
-    return out
+    def per_segment_column(x: FloatArray) -> FloatArray:  # (n, m) -> (nseg, m)
+        sums = np.bincount(cells, weights=x.ravel(), minlength=nseg * m)
+        return np.asarray(sums, dtype=float).reshape(m, nseg).T
+
+    s0 = np.maximum(per_segment(w), 1e-300)
+    sv = per_segment_column(w[:, None] * values)
+    if ramp is None:
+        return values - (sv / s0[:, None])[seg]
+    s1, s2 = per_segment(w * ramp), per_segment(w * ramp * ramp)
+    srv = per_segment_column((w * ramp)[:, None] * values)
+    det = s0 * s2 - s1 * s1
+    ok = det > 1e-12 * s0 * np.maximum(s2, 1e-300)
+    safe = np.where(ok, det, 1.0)[:, None]
+    a = np.where(ok[:, None], (s2[:, None] * sv - s1[:, None] * srv) / safe, sv / s0[:, None])
+    b = np.where(ok[:, None], (s0[:, None] * srv - s1[:, None] * sv) / safe, 0.0)
+    return np.asarray(values - a[seg] - b[seg] * ramp[:, None], dtype=float)
 
 
 def _huber(
@@ -168,7 +193,8 @@ def lateral_doppler_latency(
     ay = np.asarray(drive["ay"], dtype=float)
     wz = np.asarray(drive["wz"], dtype=float)
     bad = ~(np.isfinite(ay) & np.isfinite(wz))
-    cum_bad = _running_integral(t, bad.astype(float))
+    # reversing (a signed wheel or CAN speed): the path's left is the body's right there
+    cum_bad = _running_integral(t, (bad | reversing(drive)).astype(float))
     cum_ay = _running_integral(t, np.where(bad, 0.0, ay))
     wz_clean = np.where(bad, 0.0, wz)
     wx_clean = None
@@ -181,8 +207,10 @@ def lateral_doppler_latency(
         & (np.minimum(np.minimum(speed[k - 1], speed[k]), speed[k + 1]) > MIN_SPEED_M_S)
         & (tc[k] - t[0] > edge) & (t[-1] - tc[k] > edge)
     )  # fmt: skip
-    # no sensor gap anywhere the accelerometer is read (the span, moved by up to +-1 s)
-    use &= (np.interp(hi + 1.0, t, cum_bad) - np.interp(lo - 1.0, t, cum_bad)) == 0.0
+    # no sensor gap and no reversing anywhere the accelerometer is read (the span, moved by
+    # up to +-1 s)
+    at = _lookup(t)
+    use &= (at(hi + 1.0, cum_bad) - at(lo - 1.0, cum_bad)) == 0.0
     if int(use.sum()) < MIN_EPOCHS:
         return None
     k, lo, hi, span = k[use], lo[use], hi[use], span[use]
@@ -211,7 +239,7 @@ def lateral_doppler_latency(
     def reading(shift: float) -> FloatArray:
         """The accelerometer over each epoch's span moved ``shift`` seconds earlier, at the
         antenna."""
-        return _span_mean(t, moved, lo - shift, hi - shift)
+        return _span_mean(at, moved, lo - shift, hi - shift)
 
     roll = None
     if "wx" in drive and np.isfinite(drive["wx"]).all():
@@ -230,7 +258,7 @@ def lateral_doppler_latency(
             a = reading(tau)
             a_rate = (reading(tau - RATE_HALF_S) - reading(tau + RATE_HALF_S)) / (2.0 * RATE_HALF_S)
             if with_roll and roll is not None:
-                phi = 0.5 * (np.interp(hi - tau, t, roll) + np.interp(lo - tau, t, roll))
+                phi = 0.5 * (at(hi - tau, roll) + at(lo - tau, roll))
                 fit = _huber(np.column_stack([a, -a_rate, phi]), y, seg, ramp)
             else:
                 fit = _huber(np.column_stack([a, -a_rate]), y, one_segment, None)
