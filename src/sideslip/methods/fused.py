@@ -455,9 +455,10 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     doppler_latency = _doppler_latency(drive, nz, dop_params, geometry)
     gn = _gnss(drive, nz, doppler_latency[0])
     has_pos, has_vel = bool(gn["has_pos"]), bool(gn["has_vel"])
-    # latency and lever arm: identified on positions-only drives; with Doppler the file's
-    # lever arm is used (in steady turns r dl_x is indistinguishable from v_y)
-    calibrate = has_pos and not has_vel and nz.identify_gnss_calibration
+    # latency and lever arm as states: on positions-only drives with identify_gnss_calibration;
+    # with Doppler only with identify_doppler_lever (in steady turns r dl_x is
+    # indistinguishable from v_y, so by default the file's lever arm is used)
+    calibrate = has_pos and (nz.identify_doppler_lever if has_vel else nz.identify_gnss_calibration)
     nx = NX_CORE + (NX_GNSS_CAL if calibrate else 0)
     k_phi = roll_gain(vehicle)
     roll_params: dict[str, Any] = {}

@@ -140,6 +140,15 @@ class FusedSettings:
     # at 1 there too); fused_filter 0.255 -> 0.109 and 0.273 -> 0.218
     positions_only_tyres: bool = True
     identify_gnss_calibration: bool = False  # latency and lever arm as states (positions only)
+    # with Doppler too (opt-in): the antenna's lever-arm error (and the fixes' latency) as
+    # states with the prior lever_prior_sigma_m, for a vehicle file whose antenna position is
+    # not trusted.  An antenna 0.5 m ahead of / behind where the file says took urban_course
+    # (seed 0) from 0.037 to 0.283 / 1.018 deg beta RMSE (64 / 83 % inside 2 sigma), race_lap
+    # from 0.074 to 0.364 / 0.251; with the states 0.062 / 0.079 and 0.046 / 0.044 (100 %).
+    # Off by default: in steady turns r dl_x reads as v_y, and with the right file the 17
+    # comparison drives' mean went 0.059 -> 0.124 (cr_circle 0.107 -> 0.883, step_steer
+    # 0.034 -> 0.086)
+    identify_doppler_lever: bool = False
     # positions only: the receiver's latency from the fixes' speed against the wheels
     # (sideslip.gnss_latency; tyre-free, so slip cannot pass for delay), combined with the
     # prior N(0, latency_prior_sigma_s); the prior's noise stays on the positions.  The
