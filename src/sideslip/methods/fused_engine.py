@@ -40,6 +40,7 @@ from sideslip.models.fused_measurements import (
     A_LR,
     A_NF,
     A_NR,
+    SCALE_MAX,
     SCALE_MIN,
     front_axle_force,
     gnss_position,
@@ -382,7 +383,7 @@ def forward_nodes(
             # ---- walking pace and reversing: the rear axle rolls, it hardly slides sideways;
             # v_y - l_r r = -|v_x| f_r / C_r (the slip angle's relation times |v_x|)
             hv = rear_axle_velocity(x, u, cfg[C_K_PHI], axle, h, dr)
-            c_r = max(x[ISR], SCALE_MIN) * axle[A_CR]
+            c_r = min(max(x[ISR], SCALE_MIN), SCALE_MAX) * axle[A_CR]
             f_r = f_rear[k] if math.isfinite(f_rear[k]) else 0.0
             sig = (
                 cfg[C_LOW_SPEED_SIGMA]

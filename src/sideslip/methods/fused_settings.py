@@ -142,9 +142,9 @@ class FusedSettings:
     identify_gnss_calibration: bool = False  # latency and lever arm as states (positions only)
     # with Doppler too (opt-in): the antenna's lever-arm error (and the fixes' latency) as
     # states with the prior lever_prior_sigma_m, for a vehicle file whose antenna position is
-    # not trusted.  An antenna 0.5 m ahead of / behind where the file says took urban_course
-    # (seed 0) from 0.037 to 0.283 / 1.018 deg beta RMSE (64 / 83 % inside 2 sigma), race_lap
-    # from 0.074 to 0.364 / 0.251; with the states 0.062 / 0.079 and 0.046 / 0.044 (100 %).
+    # not trusted.  An antenna 0.5 m ahead of / behind where the file says takes urban_course
+    # (seed 0) from 0.037 to 0.178 / 0.401 deg beta RMSE, race_lap from 0.074 to 0.364 /
+    # 0.251; with the states 0.062 / 0.079 and 0.046 / 0.044 (100 % inside 2 sigma).
     # Off by default: in steady turns r dl_x reads as v_y, and with the right file the 17
     # comparison drives' mean went 0.059 -> 0.124 (cr_circle 0.107 -> 0.883, step_steer
     # 0.034 -> 0.086)
