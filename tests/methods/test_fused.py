@@ -364,6 +364,9 @@ def test_an_antenna_the_file_misplaces_does_not_make_fused_confidently_wrong() -
     est = run_method("fused", drive, load_vehicle(drive.meta["vehicle"]))
     assert two_sigma_share(drive, est) > 0.9
     assert metrics(drive, est.series)["beta_rmse_deg"] < 0.25
+    # the params report the scale the relation used, and say that it was held
+    assert est.params["rear_stiffness_scale"] == pytest.approx(2.0)
+    assert "held at 2 x the file's" in est.params["rear_stiffness_scale_note"]
 
 
 def test_an_antenna_the_file_misplaces_is_identified_with_doppler_where_asked() -> None:

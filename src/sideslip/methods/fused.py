@@ -101,6 +101,7 @@ from sideslip.methods import fused_engine as eng
 from sideslip.methods.fused_settings import FusedSettings, force_noise_variance, force_time_constant
 from sideslip.methods.registry import SPEED, register
 from sideslip.methods.roll_gyro_gradient import identify_roll_gradient_from_gyro
+from sideslip.models.fused_measurements import SCALE_MAX, SCALE_MIN
 from sideslip.models.fused_process import (
     IBG,
     ICX,
@@ -711,7 +712,7 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
         # offset of that over the axle's stiffness: one offset for the whole drive, so the
         # axle updates' white noise, averaged over thousands of rows, does not carry it
         # (comma2k19 minute at adapt_min 0.25: 81 % -> 90 % of beta errors inside 2 sigma)
-        scale = max(float(params.get("rear_stiffness_scale", 1.0)), 0.2)
+        scale = max(float(params.get("rear_stiffness_scale", 1.0)), SCALE_MIN)
         offset = nz.accel_offset_sigma * vehicle.mass * vehicle.lf / vehicle.wheelbase / (vehicle.cr * scale)
         series["beta_std"] = np.hypot(series["beta_std"], offset)
         params["beta_std_accel_offset_deg"] = math.degrees(offset)
@@ -825,11 +826,14 @@ def _node_params(
         "gyro_bias_rad_s": float(xs[-1, IBG]),
         "gyro_bias_rad_s_sigma": float(sd[IBG]),
         "gyro_scale": 1.0 / (1.0 - pick(xs[:, ISG])),
-        "front_stiffness_scale": pick(xs[:, ISF]),
+        # the scales the axle relations use: held within SCALE_MIN .. SCALE_MAX of the file's
+        "front_stiffness_scale": pick(np.clip(xs[:, ISF], SCALE_MIN, SCALE_MAX)),
         "front_stiffness_scale_sigma": float(sd[ISF]),
-        "rear_stiffness_scale": pick(xs[:, ISR]),
+        "rear_stiffness_scale": pick(np.clip(xs[:, ISR], SCALE_MIN, SCALE_MAX)),
         "rear_stiffness_scale_sigma": float(sd[ISR]),
-        "slip_gain_k_s2_m": float(geom[0] / ((geom[0] + geom[1]) * geom[3] * pick(xs[:, ISR]))),
+        "slip_gain_k_s2_m": float(
+            geom[0] / ((geom[0] + geom[1]) * geom[3] * pick(np.clip(xs[:, ISR], SCALE_MIN, SCALE_MAX)))
+        ),
         "slip_gain_k_prior_s2_m": float(geom[0] / ((geom[0] + geom[1]) * geom[3])),
         "mu": pick(xs[:, IMU]),
         "mu_sigma": float(np.sqrt(max(np.median(var_mu), 0.0))),
@@ -841,6 +845,17 @@ def _node_params(
         "health": cons.summary(tn),
         "assumed": notes,
     }
+    for axle_name, j_state in (("front", ISF), ("rear", ISR)):
+        wanted = pick(xs[:, j_state])
+        if not SCALE_MIN <= wanted <= SCALE_MAX:
+            # the relation kept asking for more (or less) slip than half .. twice the file's
+            # stiffness gives: another cue (a misplaced antenna, a latency) or the file disagrees
+            # with the tyres, and the consistency test and beta_std carry the disagreement
+            params[f"{axle_name}_stiffness_scale_note"] = (
+                f"held at {min(max(wanted, SCALE_MIN), SCALE_MAX):g} x the file's: the {axle_name} axle's "
+                f"relation asked for {wanted:.3g} x, beyond {SCALE_MIN:g}-{SCALE_MAX:g}; the tyres "
+                "disagree with another cue (antenna position, latency) or with the vehicle file"
+            )
     if xs.shape[1] > NX_CORE:
         lever = np.array(vehicle.gnss_xyz, dtype=float)
         params.update(
