@@ -193,7 +193,8 @@ def identify_doppler_latency(
     +0.005 / +0.055 / +0.106 +- 0.006 s, demo +0.000 / +0.051 / +0.101 +- 0.010,
     suburban_outages -0.008 / +0.043 / +0.093 +- 0.005; race_lap, urban_highway and drives at
     constant speed a sigma of 0.05 s to hours.  The lateral fit decides race_lap (+- 0.006 s),
-    slalom_low_mu, cr_slalom and cr_limit_slalom (+- 0.011-0.016 s) and dlc_bank (+- 0.024 s)."""
+    cr_limit_slalom (+- 0.008), cr_slalom (+- 0.011), slalom_low_mu (+- 0.016) and dlc_bank
+    (+- 0.021)."""
     speed_fit = _doppler_latency_from_speed(drive)
     lateral = doppler_latency_lateral.lateral_doppler_latency(drive, lever_x_m, lever_z_m, lr_m)
     if lateral is None:

@@ -302,15 +302,15 @@ def _doppler_latency(
     """The GNSS Doppler's latency (s) the epochs are taken with, and the 1-sigma of what may
     remain: the tyre-free fits of :func:`sideslip.gnss_latency.identify_doppler_latency` (speed
     against the wheels, course rate against the lateral accelerometer; ``geometry`` the antenna
-    ahead of and above the IMU and the CG's distance to the rear axle, m) where they decide it (sigma at most
-    :data:`DOPPLER_LATENCY_MAX_SIGMA_S`) and it is late by more than
+    ahead of and above the IMU and the CG's distance to the rear axle, m) where they decide it
+    (sigma at most :data:`DOPPLER_LATENCY_MAX_SIGMA_S`) and it is late by more than
     :data:`DOPPLER_LATENCY_MIN_Z` sigma (the fit's, with :data:`DOPPLER_LATENCY_FLOOR_S`), with
     that sigma; a decisive fit that is not late leaves 0 with the larger of the sigma and the
     fit's value.  Otherwise the epochs stay at their stamps and the sigma is the root mean
     square of the latency about 0 under the fit combined with the prior
     N(0, ``doppler_latency_prior_sigma_s``): the prior's sigma where the drive tells nothing,
     up to about the fit's value where it tells something but not enough to move the epochs
-    (slalom_low_mu 100 ms late: +0.103 +- 0.016 s, kept at 0 with sigma 0.078 s).  ``(0, 0)``
+    (slalom_low_mu 100 ms late: +0.095 +- 0.016 s, kept at 0 with sigma 0.088 s).  ``(0, 0)``
     when switched off.
 
     A Doppler velocity stamped tau late lags the heading by r tau, which in a turn reads as
@@ -819,6 +819,8 @@ def _node_params(
     sd = np.sqrt(np.maximum(var_last, 0.0))  # the last node's 1-sigma
     pick = (lambda a: float(np.median(a))) if smooth else (lambda a: float(a[-1]))
     geom, _, _ = axle_geometry(vehicle)
+    # the stiffness scales the axle relations use: held within SCALE_MIN .. SCALE_MAX
+    used = {j: pick(np.clip(xs[:, j], SCALE_MIN, SCALE_MAX)) for j in (ISF, ISR)}
     params: dict[str, Any] = {
         "node_step_s": float(np.median(np.diff(tn))) if tn.size > 1 else 0.0,
         "wheel_speed_scale": pick(xs[:, ISW]),
@@ -826,14 +828,11 @@ def _node_params(
         "gyro_bias_rad_s": float(xs[-1, IBG]),
         "gyro_bias_rad_s_sigma": float(sd[IBG]),
         "gyro_scale": 1.0 / (1.0 - pick(xs[:, ISG])),
-        # the scales the axle relations use: held within SCALE_MIN .. SCALE_MAX of the file's
-        "front_stiffness_scale": pick(np.clip(xs[:, ISF], SCALE_MIN, SCALE_MAX)),
+        "front_stiffness_scale": used[ISF],
         "front_stiffness_scale_sigma": float(sd[ISF]),
-        "rear_stiffness_scale": pick(np.clip(xs[:, ISR], SCALE_MIN, SCALE_MAX)),
+        "rear_stiffness_scale": used[ISR],
         "rear_stiffness_scale_sigma": float(sd[ISR]),
-        "slip_gain_k_s2_m": float(
-            geom[0] / ((geom[0] + geom[1]) * geom[3] * pick(np.clip(xs[:, ISR], SCALE_MIN, SCALE_MAX)))
-        ),
+        "slip_gain_k_s2_m": float(geom[0] / ((geom[0] + geom[1]) * geom[3] * used[ISR])),
         "slip_gain_k_prior_s2_m": float(geom[0] / ((geom[0] + geom[1]) * geom[3])),
         "mu": pick(xs[:, IMU]),
         "mu_sigma": float(np.sqrt(max(np.median(var_mu), 0.0))),
@@ -852,7 +851,7 @@ def _node_params(
             # stiffness gives: another cue (a misplaced antenna, a latency) or the file disagrees
             # with the tyres, and the consistency test and beta_std carry the disagreement
             params[f"{axle_name}_stiffness_scale_note"] = (
-                f"held at {min(max(wanted, SCALE_MIN), SCALE_MAX):g} x the file's: the {axle_name} axle's "
+                f"held at {used[j_state]:g} x the file's: the {axle_name} axle's "
                 f"relation asked for {wanted:.3g} x, beyond {SCALE_MIN:g}-{SCALE_MAX:g}; the tyres "
                 "disagree with another cue (antenna position, latency) or with the vehicle file"
             )
