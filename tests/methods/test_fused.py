@@ -86,6 +86,53 @@ def test_multipath_bursts_at_the_grip_limit_do_not_make_fused_confidently_wrong(
     assert rmse < min(others.values()), others
 
 
+@pytest.mark.commonroad
+def test_a_long_multipath_burst_is_not_learned_as_a_tyre_property():
+    """cr_limit_ramp seed 11: a 5 s multipath burst (5.6-10.4 s) while the BMW ramps up to
+    the limit for the first time, with a file 30 % soft.  The inertial check flags the
+    burst's start but admits its middle once the IMU-carried velocity has drifted enough;
+    the tyres learned the burst's course error as a rear axle at the 0.5x bound and kept
+    beta ~2 deg off after the burst: fused 2.02 deg with 21 % inside 2 sigma, fused_filter
+    1.99 / 80 %.  With stiffness and mu consider parameters while the check rejects a run of
+    epochs: 0.34 / 95 % and 1.31 / 94 %.  Bounds: fused's measured value doubled, the
+    filter's plus 30 % (under its 1.99 without), issue 15's 2-sigma share, and the hold must
+    matter (off at least 3x worse for fused)."""
+    pytest.importorskip("vehiclemodels", reason="needs the optional commonroad extra")
+    drive = sim_drive("cr_limit_ramp", 11)
+    v = load_vehicle(drive.meta["vehicle"])
+    soft = v.with_changes(cf=0.7 * v.cf, cr=0.7 * v.cr)
+    est = run_method("fused", drive, soft)
+    rmse = metrics(drive, est.series)["beta_rmse_deg"]
+    assert rmse < 0.68
+    assert two_sigma_share(drive, est) >= 0.90
+    causal = run_method("fused_filter", drive, soft)
+    assert metrics(drive, causal.series)["beta_rmse_deg"] < 1.7
+    assert two_sigma_share(drive, causal) >= 0.90
+    off = run_method("fused", drive, soft, settings={"doppler_check_holds_tyres": False})
+    assert metrics(drive, off.series)["beta_rmse_deg"] > 3.0 * rmse
+
+
+@pytest.mark.parametrize("scenario", ["urban_highway", "race_lap"])
+def test_an_accelerometer_offset_stays_inside_beta_std(scenario):
+    """The lateral accelerometer 0.25 m/s^2 high (25 mg, or the IMU mounted 1.5 deg rolled):
+    the tyres read it as a rear-axle force and turn it into one slip offset for the whole
+    drive (through the heading, GNSS Doppler cannot tell it from a constant sideslip).  White
+    axle noise averaged over thousands of updates does not carry it; beta_std carries the
+    slip of an accel_offset_sigma = 0.15 m/s^2 offset.  Measured share inside 2 sigma
+    without / with that term: urban_highway 0.87 / 1.00, race_lap 0.86 / 0.99 (slalom_low_mu
+    0.87 / 0.98).  Bounds: issue 15's 0.90, and the term must matter (under 0.90 without)."""
+    from dataclasses import replace
+
+    drive = sim_drive(scenario)
+    drive = replace(drive, data={**drive.data, "ay": np.asarray(drive.data["ay"]) + 0.25})
+    vehicle = load_vehicle(drive.meta["vehicle"])
+    est = run_method("fused", drive, vehicle)
+    assert two_sigma_share(drive, est) >= 0.90
+    assert est.params["beta_std_accel_offset_deg"] > 0.0
+    without = run_method("fused", drive, vehicle, settings={"accel_offset_sigma": 1e-9})
+    assert two_sigma_share(drive, without) < 0.90
+
+
 def test_the_doppler_check_does_not_blame_the_receiver_for_a_bank_ramp():
     """banked_turn seed 2 (bank 0 -> 25 deg in 3 s, then a 150 m turn): the offset state c_y
     lags the ramp, the inertial propagation from an anchor taken during the ramp drifts, and
@@ -327,6 +374,25 @@ def test_a_late_doppler_at_the_limit_is_taken_at_the_latency_its_turns_reveal() 
     assert est.params["gnss_doppler_latency_lateral_fit_s"][1] < 0.015
     assert metrics(drive, est.series)["beta_rmse_deg"] < 0.35
     assert two_sigma_share(drive, est) > 0.9
+
+
+def test_a_doppler_too_short_to_time_says_why_and_keeps_the_prior() -> None:
+    """step_steer (12 s) with a 5 Hz receiver: about 35 usable epochs, fewer than either
+    latency fit needs, so nothing is identified; the note says why (it once said "above
+    3 m/s" for a drive that was at 22 m/s throughout) and the latency's sigma is the prior's,
+    which reaches beta_std through |r| in the turn."""
+    from sideslip.doppler_latency_lateral import MIN_EPOCHS
+    from sideslip.gnss_latency import MIN_FIXES
+    from sideslip.methods import fused
+    from sideslip.simulate import SensorConfig, simulate
+
+    drive = simulate("step_steer", seed=0, config=SensorConfig(gnss_rate_hz=5.0))
+    params: dict[str, object] = {}
+    nz = FusedSettings()
+    assert fused._doppler_latency(drive, nz, params) == (0.0, nz.doppler_latency_prior_sigma_s)
+    note = str(params["gnss_doppler_latency_note"])
+    assert note.startswith("not identified: too few usable Doppler epochs above 3 m/s")
+    assert f"the speed fit needs {MIN_FIXES}, the course-rate fit {MIN_EPOCHS}" in note
 
 
 def test_a_late_doppler_the_drive_cannot_time_widens_beta_std_in_the_turn() -> None:
