@@ -159,7 +159,10 @@ def _check_config() -> np.ndarray:
 
 
 def _new_check() -> np.ndarray:
-    return np.array([0.0, 0.0, 0.0, np.nan, 0.0, np.nan, 0.0, 0.0, 0.0])
+    """The engine's own fresh check state: a hand-made array once lacked the two road-roll
+    entries the check reads (numba does not bound-check), and the spike test then failed
+    whenever the memory past its end held a large number."""
+    return eng.new_doppler_check()
 
 
 def test_doppler_check_passes_agreeing_epochs_and_inflates_a_lone_spike_only_there() -> None:

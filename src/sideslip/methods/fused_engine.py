@@ -220,6 +220,16 @@ def _doppler_check(chk, t, y_e, y_n, var_g, fy, cfg):
 
 
 @numba.njit(cache=True, nogil=True)
+def new_doppler_check():
+    """A fresh state of :func:`_doppler_check` (its docstring lists the 11 entries): no
+    anchor, nothing suspect, no roll tracked yet.  The one constructor of that state, so a
+    caller cannot hand the check a shorter array (it reads every entry unchecked)."""
+    chk = np.zeros(11)
+    chk[3] = chk[5] = chk[10] = np.nan
+    return chk
+
+
+@numba.njit(cache=True, nogil=True)
 def _track_road_roll(chk, dt, fy, cfg):
     """Low-pass (time constant ``C_VCHECK_RAMP_TAU``) of the road's roll angle, the roll gyro
     integrated (``chk[9]``) less the suspension's roll ``k_phi f_y``, into ``chk[10]``; their
@@ -323,7 +333,7 @@ def forward_nodes(
     ng = g_node.size
     t_vel_ok = tn[0]
     t_pos_ok = tn[0]
-    chk = np.array([0.0, 0.0, 0.0, np.nan, 0.0, np.nan, 0.0, 0.0, 0.0, 0.0, np.nan])  # _doppler_check's
+    chk = new_doppler_check()  # _doppler_check's state
     for k in range(N):
         if k > 0:
             _predict(x, P, U[k - 1], tn[k] - tn[k - 1], cfg, q, rows, xn, Pn, F, dr, qk, tmp)
