@@ -98,7 +98,6 @@ from sideslip.vehicle import G
     C_WHEEL_SLIP_STIFFNESS,
 ) = range(24)
 C_ADAPT_MIN = 24  # the adaptive axle noise's smallest factor
-C_SUSPECT_HOLD = 32  # 1: the tyres learn nothing while the Doppler check suspects the receiver
 C_VCHECK_ACCEL = 25  # m/s^2: drift of the IMU-carried check velocity (0: no check)
 C_VCHECK_GATE = 26  # chi^2 (2 dof) of the check
 C_VCHECK_TAU = 27  # s: how long a disagreement keeps the receiver suspect
@@ -107,6 +106,7 @@ ROLL_MODEL_SLACK_RAD = 0.035  # roll a file's suspension model may miss (2 deg):
 C_VCHECK_RAMP_TAU = 29  # s: how long after a bank change the check allows for c_y's lag
 C_LOW_SPEED_SIGMA = 30  # m/s: the rear axle's sideways velocity below C_AXLE_MIN_SPEED (0: off)
 C_CG_SIGMA = 31  # m: the file's l_r uncertainty, in that relation
+C_SUSPECT_HOLD = 32  # 1: the tyres learn nothing while the Doppler check rejects a run of epochs
 N_CFG = 33
 
 # the states whose variance is kept at every node (the outputs' sigmas, the beta_std terms and
