@@ -78,6 +78,14 @@ with GNSS positions but no Doppler, the change of beta when the whole estimator 
 with the fixes one latency sigma later (a latency turns the fixes' course by r tau in every
 turn, and how much of that reaches beta depends on how far the tyres carry the slip there).
 
+With GNSS Doppler the smoother reads the body velocity's random walk (everything the planar
+kinematics miss: accelerometer noise and vibration, roll transients, pitch and heave) from the
+drive: the value, searched down from the prior ``accel_vrw_psd`` a factor of two at a time,
+whose forward filter predicts the Doppler velocities best (``identify_accel_vrw``,
+:mod:`sideslip.methods.fused_vrw`; ``params["assumed"]["accel_vrw"]`` gives the evidence).
+``beta_std`` then carries the slip offset of an ``accel_offset_sigma`` accelerometer offset,
+which the random walk, white, does not.
+
 Discretisation and cost: the smoother steps on nodes every ``step_s`` (inputs averaged in
 between, states linearly interpolated back to every row); the filter steps on every row.
 Memory: the filtered state and the float32 upper triangle of each node's covariance; linear
@@ -87,6 +95,7 @@ in the drive's length.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -98,7 +107,13 @@ from sideslip.estimate import Estimate
 from sideslip.filters.consistency import nis_consistency
 from sideslip.gnss_latency import identify_doppler_latency, identify_latency
 from sideslip.methods import fused_engine as eng
-from sideslip.methods.fused_settings import FusedSettings, force_noise_variance, force_time_constant
+from sideslip.methods.fused_settings import (
+    FusedSettings,
+    accel_noise_sigma,
+    force_noise_variance,
+    force_time_constant,
+)
+from sideslip.methods.fused_vrw import VrwChoice, search_accel_vrw
 from sideslip.methods.registry import SPEED, register
 from sideslip.methods.roll_gyro_gradient import identify_roll_gradient_from_gyro
 from sideslip.models.fused_measurements import SCALE_MAX, SCALE_MIN
@@ -476,6 +491,8 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     # the causal filter keeps its floor (a time constant from the whole drive's noise would
     # read the future); the smoother's is raised where the drive's noise needs it
     tau_f = force_time_constant(t, ay, nz.smoother_force_tau_s, nz) if smooth else nz.force_tau_s
+    # the smallest velocity random walk the drive can have: its accelerometer's white noise
+    vrw_floor = accel_noise_sigma(ay) * math.sqrt(drive.dt_median) if n > 1 else 0.0
     force_var = force_noise_variance(t, ay, tau_f, nz, causal=not smooth)
     # where the tyres alone carry the slip (no GNSS) the smoother learns the stiffness from
     # the transients, and there the axle forces must not lag the state: zero-phase low-pass
@@ -620,6 +637,10 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     before = (tn, U, vw_n, *node_inputs, g_node)
     after = (gn["gnss_e"], gn["gnss_n"], gn["pstd"], gn["gnss_ve"], gn["gnss_vn"], gn["vstd"],
              x0, P0, q, f_rows(nx), axle, lever, cfg, smooth)  # fmt: skip
+    if smooth and has_vel and nz.identify_accel_vrw and g_node.size >= nz.accel_vrw_min_epochs:
+        choice = _identify_accel_vrw(before, g_age, after, cfg, nz, vrw_floor)
+        cfg[eng.C_ACCEL_VRW] = choice.vrw
+        notes["accel_vrw"] = choice.note()
     xs, var, var_last, cov_vxvy, nis, counts = eng.run_nodes(*before, g_age, *after)
     latency_beta = None  # |d beta| at the nodes for a latency one sigma later (positions only)
     if has_pos and not has_vel and not calibrate:
@@ -749,6 +770,34 @@ INNOVATION_CHANNELS = (
     ("gnss_velocity_nis", eng.K_GNSS_VEL),
     ("gnss_position_nis", eng.K_GNSS_POS),
 )
+
+
+def _identify_accel_vrw(
+    before: tuple[Any, ...], g_age: FloatArray, after: tuple[Any, ...], cfg: FloatArray,
+    nz: FusedSettings, floor: float,
+) -> VrwChoice:  # fmt: skip
+    """The velocity random walk whose forward filter predicts the drive's Doppler velocities
+    best (:mod:`sideslip.methods.fused_vrw`); two candidates at a time on two threads (the
+    forward pass runs without the GIL), each with its own copy of the configuration."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    head = after[:-2]  # after = (..., cfg, smooth)
+    forward: Any = eng.forward_nodes  # compiled; the last of its outputs is doppler_ll
+
+    def one(vrw: float) -> float:
+        c = cfg.copy()
+        c[eng.C_ACCEL_VRW] = vrw
+        return float(forward(*before, g_age, *head, c, False)[-1][0])
+
+    def many(values: Sequence[float]) -> list[float]:
+        if len(values) == 1:
+            return [one(values[0])]
+        with ThreadPoolExecutor(max_workers=len(values)) as pool:
+            return list(pool.map(one, values))
+
+    return search_accel_vrw(
+        many, nz.accel_vrw_psd, floor, nz.accel_vrw_min_factor, nz.accel_vrw_max_factor
+    )
 
 
 def _innovations(n: int, idx: NDArray[np.intp], nis: FloatArray) -> dict[str, Any]:

@@ -298,11 +298,16 @@ def forward_nodes(
 ):
     """Forward EKF over the nodes; see the module docstring.
 
-    Returns ``(xs, Ps, var, var_last, cov_vxvy, nis, counts)``: filtered states (N, nx),
+    Returns ``(xs, Ps, var, var_last, cov_vxvy, nis, counts, doppler_ll)``: filtered states (N, nx),
     (``smooth``) their covariances' packed float32 upper triangles (N, nx (nx + 1) / 2), the
     variances of :data:`VAR_STATES` (N, len), the last node's whole diagonal (nx), the v_x-v_y
     covariance, the NIS per channel (N, N_CHANNELS), and counts
-    ``[gnss accepted, gnss down-weighted, axle accepted, axle down-weighted]``.
+    ``[gnss accepted, gnss down-weighted, axle accepted, axle down-weighted]``, and
+    ``doppler_ll = [sum over Doppler epochs of log det S + min(d2, gate), epochs]``: the
+    prediction-error decomposition of the Doppler velocities' likelihood (-2 log L less a
+    constant; Schweppe 1965, IEEE Trans. Inf. Theory 11(1)), each epoch's Mahalanobis
+    distance capped at the GNSS gate (Huber-type: a multipath epoch counts as an outlier, not
+    as evidence for more process noise).
     """
     N = tn.size
     nx = x0.size
@@ -314,6 +319,7 @@ def forward_nodes(
     cov_vxvy = np.zeros(N)
     nis = np.full((N, N_CHANNELS), np.nan)
     counts = np.zeros(4, dtype=np.int64)
+    doppler_ll = np.zeros(2)
     x = x0.copy()
     P = P0.copy()
     xn = np.zeros(nx)
@@ -469,9 +475,11 @@ def forward_nodes(
                 # a run of rejected epochs longer than C_GNSS_RESET means the filter, not the
                 # receiver, is wrong: the next epoch is taken at full weight
                 g_gate = cfg[C_GATE_GNSS] if tn[k] - t_vel_ok < cfg[C_GNSS_RESET] else 1e300
-                d2 = update_robust_pair_ws_nb(
-                    x, P, H2, g_ve[gi] - he, g_vn[gi] - hn, g_vstd[gi] ** 2 * infl, g_gate, work
-                )
+                r_vel = g_vstd[gi] ** 2 * infl
+                doppler_ll[0] += _log_det_pair(P, H2, r_vel)
+                d2 = update_robust_pair_ws_nb(x, P, H2, g_ve[gi] - he, g_vn[gi] - hn, r_vel, g_gate, work)
+                doppler_ll[0] += min(d2, cfg[C_GATE_GNSS])
+                doppler_ll[1] += 1.0
                 ok = d2 <= g_gate
                 if ok:
                     t_vel_ok = tn[k]
@@ -503,7 +511,28 @@ def forward_nodes(
         cov_vxvy[k] = P[IVX, IVY]
     for i in range(nx):
         var_last[i] = P[i, i]
-    return xs, Ps, var, var_last, cov_vxvy, nis, counts
+    return xs, Ps, var, var_last, cov_vxvy, nis, counts, doppler_ll
+
+
+@numba.njit(cache=True, nogil=True)
+def _log_det_pair(P, H, r):
+    """``log det (H P H' + r I)`` of a two-row measurement ``H`` (2, nx)."""
+    nx = P.shape[0]
+    s00 = s01 = s11 = 0.0
+    for i in range(nx):
+        if H[0, i] == 0.0 and H[1, i] == 0.0:
+            continue
+        a0 = 0.0
+        a1 = 0.0
+        for j in range(nx):
+            a0 += P[i, j] * H[0, j]
+            a1 += P[i, j] * H[1, j]
+        s00 += H[0, i] * a0
+        s01 += H[1, i] * a0
+        s11 += H[1, i] * a1
+    s00 += r
+    s11 += r
+    return math.log(max(s00 * s11 - s01 * s01, 1e-300))
 
 
 @numba.njit(cache=True, nogil=True)
@@ -605,7 +634,7 @@ def run_nodes(
     sequential pass."""
     from concurrent.futures import ThreadPoolExecutor
 
-    xs, Ps, var, var_last, cov_vxvy, nis, counts = forward_nodes(
+    xs, Ps, var, var_last, cov_vxvy, nis, counts, _ = forward_nodes(
         tn, U, vw, f_front, f_rear, delta, mu_floor, steady, force_var, g_node, g_age, g_e, g_n, g_pstd,
         g_ve, g_vn, g_vstd, x0, P0, q, rows, axle, lever, cfg, smooth,
     )  # fmt: skip
