@@ -19,8 +19,9 @@ c_y from the gyro bias times v_x, so the roll gyro (when the drive has wx) drive
 bank changes only as the body rolls (seed 003: roll = suspension roll + bank), and c_y's random
 walk is left with the accelerometer's drift (banked_turn without GNSS: gyro bias 0.083 rad/s
 and beta RMSE 0.41 deg with the random walk alone, 0.0015 rad/s and 0.012 deg with the roll
-gyro, 0.007 with the changes below).  With GNSS, v_y is measured and c_y stays a random
-walk.  Without GNSS the gyro scale factor is held at 1 (it is identified against the GNSS
+gyro, 0.007 with the changes below).  The smoother with GNSS Doppler takes the roll gyro's
+bank too, with c_y's remaining random walk read from the drive (below); with GNSS positions
+only, the same as without GNSS; the causal filter with Doppler keeps c_y a random walk.  Without GNSS the gyro scale factor is held at 1 (it is identified against the GNSS
 course, seed 001), in the smoother the wheel-speed scale too (identified against the GNSS
 speed, seed 004).
 
@@ -82,7 +83,9 @@ With GNSS Doppler the smoother reads the body velocity's random walk (everything
 kinematics miss: accelerometer noise and vibration, roll transients, pitch and heave) from the
 drive: the value, searched down from the prior ``accel_vrw_psd`` a factor of two at a time,
 whose forward filter predicts the Doppler velocities best (``identify_accel_vrw``,
-:mod:`sideslip.methods.fused_vrw`; ``params["assumed"]["accel_vrw"]`` gives the evidence).
+:mod:`sideslip.methods.fused_vrw`; ``params["assumed"]["accel_vrw"]`` gives the evidence),
+and then, where the roll gyro drives the bank, c_y's random walk the same way
+(``identify_cy_psd``, ``params["assumed"]["cy_psd"]``).
 ``beta_std`` then carries the slip offset of an ``accel_offset_sigma`` accelerometer offset,
 which the random walk, white, does not.
 
@@ -113,7 +116,7 @@ from sideslip.methods.fused_settings import (
     force_noise_variance,
     force_time_constant,
 )
-from sideslip.methods.fused_vrw import VrwChoice, search_accel_vrw
+from sideslip.methods.fused_vrw import NoiseChoice, search_accel_vrw, search_noise_scale
 from sideslip.methods.registry import SPEED, register
 from sideslip.methods.roll_gyro_gradient import identify_roll_gradient_from_gyro
 from sideslip.models.fused_measurements import SCALE_MAX, SCALE_MIN
@@ -578,10 +581,12 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     # the road's bank rate (input of c_y) without GNSS: the roll gyro less the suspension's
     # roll rate k_phi f_y'; the roll gyro's bias is the drive's mean roll rate off-line (the
     # body ends a drive about as level as it starts: 1 deg over 60 s is 3e-4 rad/s), 0 in the
-    # causal filter (c_y's random walk carries the ramp g b_x).  Without wx, or with GNSS
-    # Doppler (which measures v_y), the input is 0 and c_y a random walk, as before
+    # causal filter (c_y's random walk carries the ramp g b_x).  With GNSS Doppler the
+    # smoother takes it too (FusedSettings.roll_gyro_bank_with_doppler) and reads c_y's
+    # remaining random walk from the drive (_identify_noise); the causal filter, and drives
+    # without wx, keep c_y a random walk
     has_wx = "wx" in drive and bool(np.isfinite(drive["wx"]).any())
-    has_wx = has_wx and nz.roll_gyro_bank and tyres_carry
+    has_wx = has_wx and nz.roll_gyro_bank and (tyres_carry or (smooth and nz.roll_gyro_bank_with_doppler))
     bx = float(np.mean(wx)) if smooth and has_wx else 0.0
     road_roll = (wx - bx - k_phi * _backward_rate(t, fy_lp)) if has_wx else np.zeros(n)
     U = eng.block_means(idx, (wz, wx, wy, ax, ay, fy_lp, road_roll))
@@ -638,9 +643,8 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     after = (gn["gnss_e"], gn["gnss_n"], gn["pstd"], gn["gnss_ve"], gn["gnss_vn"], gn["vstd"],
              x0, P0, q, f_rows(nx), axle, lever, cfg, smooth)  # fmt: skip
     if smooth and has_vel and nz.identify_accel_vrw and g_node.size >= nz.accel_vrw_min_epochs:
-        choice = _identify_accel_vrw(before, g_age, after, cfg, nz, vrw_floor)
-        cfg[eng.C_ACCEL_VRW] = choice.vrw
-        notes["accel_vrw"] = choice.note()
+        for name, choice in _identify_noise(before, g_age, after, nz, vrw_floor, has_wx):
+            notes[name] = choice.note()
     xs, var, var_last, cov_vxvy, nis, counts = eng.run_nodes(*before, g_age, *after)
     latency_beta = None  # |d beta| at the nodes for a latency one sigma later (positions only)
     if has_pos and not has_vel and not calibrate:
@@ -772,32 +776,49 @@ INNOVATION_CHANNELS = (
 )
 
 
-def _identify_accel_vrw(
-    before: tuple[Any, ...], g_age: FloatArray, after: tuple[Any, ...], cfg: FloatArray,
-    nz: FusedSettings, floor: float,
-) -> VrwChoice:  # fmt: skip
-    """The velocity random walk whose forward filter predicts the drive's Doppler velocities
-    best (:mod:`sideslip.methods.fused_vrw`); two candidates at a time on two threads (the
-    forward pass runs without the GIL), each with its own copy of the configuration."""
+def _identify_noise(
+    before: tuple[Any, ...], g_age: FloatArray, after: tuple[Any, ...], nz: FusedSettings,
+    vrw_floor: float, bank_from_roll_gyro: bool,
+) -> list[tuple[str, NoiseChoice]]:  # fmt: skip
+    """The process noise whose forward filter predicts the drive's Doppler velocities best
+    (:mod:`sideslip.methods.fused_vrw`), set in place in ``after``'s configuration and
+    process-noise arrays: the velocity random walk, then, where the roll gyro drives the
+    bank, the bank offset's random walk at that velocity random walk.  Two candidates at a
+    time on two threads (the forward pass runs without the GIL), each with its own copies."""
     from concurrent.futures import ThreadPoolExecutor
 
-    head = after[:-2]  # after = (..., cfg, smooth)
+    *head, q, rows, axle, lever, cfg, _ = after
     forward: Any = eng.forward_nodes  # compiled; the last of its outputs is doppler_ll
 
-    def one(vrw: float) -> float:
-        c = cfg.copy()
+    def one(vrw: float, cy_psd: float) -> float:
+        c, qc = cfg.copy(), q.copy()
         c[eng.C_ACCEL_VRW] = vrw
-        return float(forward(*before, g_age, *head, c, False)[-1][0])
+        qc[ICY] = cy_psd**2
+        out = forward(*before, g_age, *head, qc, rows, axle, lever, c, False)
+        return float(out[-1][0])
 
-    def many(values: Sequence[float]) -> list[float]:
+    def many(f: Any, values: Sequence[float]) -> list[float]:
         if len(values) == 1:
-            return [one(values[0])]
+            return [f(values[0])]
         with ThreadPoolExecutor(max_workers=len(values)) as pool:
-            return list(pool.map(one, values))
+            return list(pool.map(f, values))
 
-    return search_accel_vrw(
-        many, nz.accel_vrw_psd, floor, nz.accel_vrw_min_factor, nz.accel_vrw_max_factor
-    )
+    cy_prior = math.sqrt(q[ICY])
+    found = []
+    vrw = search_accel_vrw(
+        lambda vs: many(lambda v: one(v, cy_prior), vs),
+        nz.accel_vrw_psd, vrw_floor, nz.accel_vrw_min_factor, nz.accel_vrw_max_factor,
+    )  # fmt: skip
+    cfg[eng.C_ACCEL_VRW] = vrw.value
+    found.append(("accel_vrw", vrw))
+    if bank_from_roll_gyro and nz.identify_cy_psd:
+        cy = search_noise_scale(
+            lambda vs: many(lambda v: one(vrw.value, v), vs),
+            cy_prior, 0.0, nz.cy_psd_min_factor, 1.0, unit="m/s^2/sqrt(s)",
+        )  # fmt: skip
+        q[ICY] = cy.value**2
+        found.append(("cy_psd", cy))
+    return found
 
 
 def _innovations(n: int, idx: NDArray[np.intp], nis: FloatArray) -> dict[str, Any]:

@@ -33,6 +33,12 @@ class FusedSettings:
     accel_vrw_min_factor: float = 1.0 / 16.0
     accel_vrw_max_factor: float = 1.0
     accel_vrw_min_epochs: int = 50  # Doppler epochs the drive needs for it
+    # where the roll gyro drives the bank (roll_gyro_bank_with_doppler), c_y's random walk is
+    # left with what the roll gyro misses (its drift, the suspension roll model's error, the
+    # accelerometer's drift): read from the drive the same way, halving cy_psd (down to
+    # cy_psd_min_factor of it) while the Doppler velocities' likelihood improves
+    identify_cy_psd: bool = True
+    cy_psd_min_factor: float = 1.0 / 16.0
     gyro_arw_psd: float = 5e-4  # rad/sqrt(s): angle random walk (consumer MEMS 1e-4 ... 5e-4)
     gyro_standstill_sigma: float = 0.003  # rad/s per sample, the standstill yaw-rate update
     gyro_bias_psd: float = 2e-5  # rad/s/sqrt(s)
@@ -139,6 +145,11 @@ class FusedSettings:
     # the road bank changes as the body rolls: the roll gyro (less the suspension's roll
     # rate) drives c_y when the drive has wx, instead of c_y's random walk alone
     roll_gyro_bank: bool = True
+    # ... in the smoother with GNSS Doppler too: the bank then follows the body's roll
+    # instead of c_y's random walk, which in a steady turn let the Doppler's noise wander
+    # into v_y (step_steer 0.029 -> 0.019 deg with cy_psd read from the drive,
+    # benchmarks/results/fused_accuracy.md); the causal filter keeps the random walk
+    roll_gyro_bank_with_doppler: bool = True
     # the roll gain from the roll gyro in the drive's lateral transients where it contradicts
     # the file's m h / (k - m g h) (sideslip.methods.roll_gyro_gradient; read from the whole
     # drive, for the causal filter too, as a calibration of the car): a file whose mass, CG
@@ -247,6 +258,8 @@ class FusedSettings:
             raise ValueError(
                 f"FusedSettings.accel_vrw_min_factor = {self.accel_vrw_min_factor!r}: expected <= 1"
             )
+        if self.cy_psd_min_factor > 1.0:
+            raise ValueError(f"FusedSettings.cy_psd_min_factor = {self.cy_psd_min_factor!r}: expected <= 1")
         if self.accel_vrw_max_factor < 1.0:
             raise ValueError(
                 f"FusedSettings.accel_vrw_max_factor = {self.accel_vrw_max_factor!r}: expected >= 1"

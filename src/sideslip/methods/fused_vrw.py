@@ -26,22 +26,23 @@ import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
-__all__ = ["VrwChoice", "search_accel_vrw"]
+__all__ = ["NoiseChoice", "search_accel_vrw", "search_noise_scale"]
 
 
 @dataclass(frozen=True)
-class VrwChoice:
-    """The chosen velocity random walk and the evidence for it."""
+class NoiseChoice:
+    """A chosen noise density and the evidence for it."""
 
-    vrw: float  # m/s/sqrt(s)
-    prior: float  # m/s/sqrt(s): FusedSettings.accel_vrw_psd
-    tried: tuple[tuple[float, float], ...]  # (vrw, -2 log L less the best's), in search order
+    value: float  # in the unit below
+    prior: float  # the settings' value
+    tried: tuple[tuple[float, float], ...]  # (value, -2 log L less the best's), in search order
+    unit: str = "m/s/sqrt(s)"
 
     def note(self) -> str:
         """One line for the estimate's notes."""
         tried = ", ".join(f"{v:.3g}: {d:+.1f}" for v, d in sorted(self.tried, reverse=True))
         return (
-            f"{self.vrw:.3g} m/s/sqrt(s) (prior {self.prior:.3g}): the best predictor of the "
+            f"{self.value:.3g} {self.unit} (prior {self.prior:.3g}): the best predictor of the "
             f"Doppler velocities; -2 log L against the best: {tried}"
         )
 
@@ -52,16 +53,30 @@ def search_accel_vrw(
     floor: float,
     min_factor: float = 1.0 / 16.0,
     max_factor: float = 4.0,
-) -> VrwChoice:
-    """Direct search of the velocity random walk (m/s/sqrt(s)) over ``prior * 2**k``.
-
-    ``neg2ll(values)`` returns ``-2 log L`` of the Doppler innovations for each value (any
-    constant offset); it is called with at most two values at a time.  ``floor`` (m/s/sqrt(s))
-    bounds the search below together with ``prior * min_factor``; the prior itself is always
-    a candidate.
-    """
+) -> NoiseChoice:
+    """Direct search of the velocity random walk (m/s/sqrt(s)); see :func:`search_noise_scale`."""
     if not (prior > 0.0 and math.isfinite(prior)):
         raise ValueError(f"prior velocity random walk must be positive and finite, got {prior!r}")
+    return search_noise_scale(neg2ll, prior, floor, min_factor, max_factor)
+
+
+def search_noise_scale(
+    neg2ll: Callable[[Sequence[float]], Sequence[float]],
+    prior: float,
+    floor: float,
+    min_factor: float = 1.0 / 16.0,
+    max_factor: float = 4.0,
+    unit: str = "m/s/sqrt(s)",
+) -> NoiseChoice:
+    """Direct search of a noise density over ``prior * 2**k``.
+
+    ``neg2ll(values)`` returns ``-2 log L`` of the Doppler innovations for each value (any
+    constant offset); it is called with at most two values at a time.  ``floor`` (the
+    density's unit) bounds the search below together with ``prior * min_factor``; the prior
+    itself is always a candidate.
+    """
+    if not (prior > 0.0 and math.isfinite(prior)):
+        raise ValueError(f"prior noise density must be positive and finite, got {prior!r}")
     lowest = max(prior * min_factor, floor if math.isfinite(floor) else 0.0)
     highest = prior * max_factor
     seen: dict[float, float] = {}
@@ -91,4 +106,4 @@ def search_accel_vrw(
     chosen = best()
     ref = seen[chosen]
     tried = tuple((v, seen[v] - ref) for v in seen)
-    return VrwChoice(vrw=chosen, prior=prior, tried=tried)
+    return NoiseChoice(value=chosen, prior=prior, tried=tried, unit=unit)
