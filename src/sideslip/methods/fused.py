@@ -21,9 +21,10 @@ walk is left with the accelerometer's drift (banked_turn without GNSS: gyro bias
 and beta RMSE 0.41 deg with the random walk alone, 0.0015 rad/s and 0.012 deg with the roll
 gyro, 0.007 with the changes below).  The smoother with GNSS Doppler takes the roll gyro's
 bank too, with c_y's remaining random walk read from the drive (below); with GNSS positions
-only, the same as without GNSS; the causal filter with Doppler keeps c_y a random walk.  Without GNSS the gyro scale factor is held at 1 (it is identified against the GNSS
-course, seed 001), in the smoother the wheel-speed scale too (identified against the GNSS
-speed, seed 004).
+only, the same as without GNSS; the causal filter with Doppler keeps c_y a random walk.
+Without GNSS the gyro scale factor is held at 1 (it is identified against the GNSS course,
+seed 001), in the smoother the wheel-speed scale too (identified against the GNSS speed, seed
+004).
 
 Measurements (:mod:`sideslip.models.fused_measurements`): wheel speed ``s_w v_x``;
 standstill (v = 0, r = 0); the rear and front axle force relations of the brush tyre model
