@@ -88,7 +88,12 @@ whose forward filter predicts the Doppler velocities best (``identify_accel_vrw`
 and then, where the roll gyro drives the bank, c_y's random walk the same way
 (``identify_cy_psd``, ``params["assumed"]["cy_psd"]``).
 ``beta_std`` then carries the slip offset of an ``accel_offset_sigma`` accelerometer offset,
-which the random walk, white, does not.
+which the random walk, white, does not.  With Doppler and fixes the smoother also checks the
+file's antenna position (``check_doppler_lever``, :mod:`sideslip.methods.fused_lever`): an
+antenna ``dl_x`` ahead of where the file says adds ``r dl_x`` to the Doppler's lateral
+velocity, which reads as slip; a pass without the tyres finds ``dl_x``, and the antenna is
+moved only where that pass puts it beyond ``doppler_lever_z`` sigmas and the filter with the
+tyres predicts the Doppler better with it moved (``params["assumed"]["gnss_lever_x"]``).
 
 Discretisation and cost: the smoother steps on nodes every ``step_s`` (inputs averaged in
 between, states linearly interpolated back to every row); the filter steps on every row.
@@ -98,6 +103,7 @@ in the drive's length.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Sequence
 from typing import Any
@@ -111,6 +117,7 @@ from sideslip.estimate import Estimate
 from sideslip.filters.consistency import nis_consistency
 from sideslip.gnss_latency import identify_doppler_latency, identify_latency
 from sideslip.methods import fused_engine as eng
+from sideslip.methods.fused_lever import check_lever, without_tyres
 from sideslip.methods.fused_settings import (
     FusedSettings,
     accel_noise_sigma,
@@ -646,6 +653,22 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     if smooth and has_vel and nz.identify_accel_vrw and g_node.size >= nz.accel_vrw_min_epochs:
         for name, choice in _identify_noise(before, g_age, after, nz, vrw_floor, has_wx):
             notes[name] = choice.note()
+    lever_check = None
+    if smooth and has_vel and has_pos and not calibrate and nz.check_doppler_lever:
+        # the antenna where the file says, unless the Doppler contradicts it tyre-free
+        # (sideslip.methods.fused_lever) and the moved antenna predicts the Doppler better
+        # with the tyres too: a misplaced antenna's r dl_x reads as slip
+        lever_check = check_lever(
+            before, g_age, without_tyres(after), nz.lever_prior_sigma_m, nz.lever_psd,
+            nz.latency_prior_sigma_s, nz.latency_psd, nz.doppler_lever_z,
+        )  # fmt: skip
+        if lever_check.found:
+            file_x = float(lever[0])
+            neg2ll = _doppler_neg2ll(before, g_age, after, (file_x, file_x + lever_check.dl_x_m))
+            lever_check = dataclasses.replace(lever_check, gain=neg2ll[0] - neg2ll[1])
+        notes["gnss_lever_x"] = lever_check.note()
+        if lever_check.applied:
+            lever[0] += lever_check.dl_x_m
     xs, var, var_last, cov_vxvy, nis, counts = eng.run_nodes(*before, g_age, *after)
     latency_beta = None  # |d beta| at the nodes for a latency one sigma later (positions only)
     if has_pos and not has_vel and not calibrate:
@@ -702,6 +725,8 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     node_params = _node_params(vehicle, smooth, xs, var[:, vc[IMU]], var_last, counts, cons, tn, k_phi, notes)
     node_params.update(roll_params)
     node_params.update(dop_params)
+    if lever_check is not None:
+        node_params.update(lever_check.params())
     del xs, var, cov_vxvy  # the row outputs need only the columns copied above
     if rebuild:
         wz, wy = _hold(drive, "wz"), _hold(drive, "wy")
@@ -820,6 +845,25 @@ def _identify_noise(
         q[ICY] = cy.value**2
         found.append(("cy_psd", cy))
     return found
+
+
+def _doppler_neg2ll(
+    before: tuple[Any, ...], g_age: FloatArray, after: tuple[Any, ...], lever_x: Sequence[float]
+) -> list[float]:
+    """``-2 log L`` of the Doppler innovations of the forward filter with ``after``'s noise for
+    each antenna position ``lever_x`` (m ahead of the CG), on two threads."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    *head, q, rows, axle, lever, cfg, _ = after
+    forward: Any = eng.forward_nodes
+
+    def one(x: float) -> float:
+        arm = lever.copy()
+        arm[0] = x
+        return float(forward(*before, g_age, *head, q, rows, axle, arm, cfg, False)[-1][0])
+
+    with ThreadPoolExecutor(max_workers=2) as pool:
+        return list(pool.map(one, lever_x))
 
 
 def _innovations(n: int, idx: NDArray[np.intp], nis: FloatArray) -> dict[str, Any]:

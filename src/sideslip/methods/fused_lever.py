@@ -1,0 +1,141 @@
+"""The GNSS antenna's longitudinal lever arm, checked tyre-free against the drive's Doppler.
+
+The Doppler velocity is the antenna's: ``v + omega x l``, so an antenna ``dl_x`` ahead of where
+the vehicle file says adds ``r dl_x`` to the lateral velocity it measures, which the fused
+smoother reads as sideslip (0.5 m at 10 m/s and 0.3 rad/s: 0.9 deg).  As a state learned
+together with the tyres it takes the tyres' errors too (a steady circle cannot tell ``r dl_x``
+from ``v_y``; benchmarks/results/fused_accuracy.md: false offsets of 0.3-0.8 m on drives with
+the right file).  Without the tyres the kinematics still separate them wherever the yaw rate
+changes faster than the body velocity's random walk lets ``v_y`` wander: ``v_y`` follows the
+accelerometers (``dv_y/dt = a_y - r v_x``), ``r dl_x`` follows the gyro.
+
+:func:`check_lever` runs the smoother once more with the axle relations switched off
+(:func:`without_tyres`) and the lever-arm states on, with the process noise read from the
+drive for the estimate (:mod:`sideslip.methods.fused_vrw`), and reads ``dl_x`` with its
+sigma.  The file's antenna is kept unless the drive contradicts it twice: where ``|dl_x|``
+exceeds ``z_gate`` sigmas, and the forward filter with the tyres predicts the Doppler better
+with the antenna moved by ``dl_x`` than with the file's, by more than ``z_gate^2`` in
+``-2 log L`` (``LeverCheck.gain``, computed by the caller).
+The second test is there because the tyre-free kinematics have model errors of their own
+that the first does not carry: at a true 0 the pass read +0.06 to +0.21 m on our simulated
+drives, beyond 3 sigma on the race lap (+0.16 +- 0.02 m) and the 15-minute endurance drive
+(+0.21 +- 0.05 m, where moving the antenna took beta 0.015 -> 0.040 deg and the likelihood
+with the tyres rose by 209); for antennas truly 0.5 m off it fell by 46 to 489.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from sideslip.methods import fused_engine as eng
+from sideslip.models.fused_process import ILX, ILY, ITAU, NX_CORE, NX_GNSS_CAL, f_rows
+
+__all__ = ["LeverCheck", "check_lever", "without_tyres"]
+
+# the axle relations' residual floor (m/s^2) that takes the tyres out of the pass: a million
+# times any lateral acceleration, so they carry no information on v_y
+NO_TYRES_FORCE_SIGMA = 1e6
+
+
+@dataclass(frozen=True)
+class LeverCheck:
+    """The tyre-free longitudinal lever-arm error ``dl_x_m`` (antenna this far ahead of the
+    file's, m) with its 1-sigma; where it is beyond ``z_gate`` sigmas, ``gain``: ``-2 log L``
+    of the Doppler innovations with the tyres, the file's antenna less the moved one."""
+
+    dl_x_m: float
+    sigma_m: float
+    z_gate: float
+    gain: float = math.nan
+
+    @property
+    def z(self) -> float:
+        return abs(self.dl_x_m) / self.sigma_m if self.sigma_m > 0.0 else math.inf
+
+    @property
+    def found(self) -> bool:
+        """The tyre-free pass puts the antenna beyond the gate."""
+        return bool(math.isfinite(self.dl_x_m) and self.z > self.z_gate)
+
+    @property
+    def applied(self) -> bool:
+        """... and with the tyres the moved antenna predicts the Doppler better by more than
+        the gate's chi^2 (one degree of freedom): the estimate moves the antenna."""
+        return self.found and self.gain > self.z_gate**2
+
+    def note(self) -> str:
+        found = (
+            f"tyre-free against the Doppler: antenna {self.dl_x_m:+.3f} +- {self.sigma_m:.3f} m "
+            f"ahead of the file's ({self.z:.1f} sigma"
+        )
+        if not self.found:
+            return f"{found}, within {self.z_gate:g}): the file's kept"
+        with_tyres = f"with the tyres -2 log L of the Doppler {-self.gain:+.1f} moved"
+        if self.applied:
+            return f"{found}; {with_tyres}): moved by it"
+        return f"{found}; but {with_tyres}, not below -{self.z_gate**2:g}): the file's kept"
+
+    def params(self) -> dict[str, Any]:
+        found = math.isfinite(self.dl_x_m) and math.isfinite(self.sigma_m)
+        return {
+            "gnss_lever_x_tyre_free_m": self.dl_x_m if found else None,
+            "gnss_lever_x_tyre_free_m_sigma": self.sigma_m if found else None,
+            "gnss_lever_x_neg2ll_gain": self.gain if math.isfinite(self.gain) else None,
+            "gnss_lever_x_applied_m": self.dl_x_m if self.applied else 0.0,
+        }
+
+
+def without_tyres(after: tuple[Any, ...]) -> tuple[Any, ...]:
+    """``after`` (the trailing arguments of :func:`sideslip.methods.fused_engine.run_nodes`)
+    with the axle relations switched off, on copies of its configuration and process noise
+    (the caller's stay as they are); the lever arm is the caller's array."""
+    *head, q, rows, axle, lever, cfg, smooth = after
+    c = cfg.copy()
+    c[eng.C_FORCE_SIGMA] = NO_TYRES_FORCE_SIGMA
+    c[eng.C_LOW_SPEED_SIGMA] = 0.0
+    return (*head, q.copy(), rows, axle, lever, c, smooth)
+
+
+def check_lever(
+    before: tuple[Any, ...],
+    g_age: np.ndarray,
+    free: tuple[Any, ...],
+    lever_prior_sigma_m: float,
+    lever_psd: float,
+    latency_prior_sigma_s: float,
+    latency_psd: float,
+    z_gate: float,
+) -> LeverCheck:
+    """The smoother of :func:`sideslip.methods.fused_engine.run_nodes` (``before``, ``g_age``
+    as its arguments; ``free`` its trailing arguments with the core states only, from
+    :func:`without_tyres`) once more, with the antenna's lever-arm error (prior
+    ``N(0, lever_prior_sigma_m)``, random walk ``lever_psd``) and the fixes' latency
+    (likewise) as states; ``dl_x`` is the smoothed states' median, its sigma the last node's
+    (a constant's smoothed sigma)."""
+    g_e, g_n, pstd, ve, vn, vstd, x0, P0, q, _, axle, lever, cfg, _ = free
+    nx = NX_CORE + NX_GNSS_CAL
+    x0c = np.zeros(nx)
+    x0c[:NX_CORE] = x0
+    P0c = np.zeros((nx, nx))
+    P0c[:NX_CORE, :NX_CORE] = P0
+    P0c[ILX, ILX] = P0c[ILY, ILY] = lever_prior_sigma_m**2
+    # the fixes' latency beside it: on an arc the fixes see an antenna ahead as an along-track
+    # offset, the same as a latency of -dl_x / v, so the fixes alone do not decide it
+    P0c[ITAU, ITAU] = latency_prior_sigma_s**2
+    qc = np.zeros(nx)
+    qc[:NX_CORE] = q
+    qc[ILX] = qc[ILY] = lever_psd**2
+    qc[ITAU] = latency_psd**2
+    run: Any = eng.run_nodes  # compiled
+    xs, _, var_last, *_ = run(
+        *before, g_age, g_e, g_n, pstd, ve, vn, vstd, x0c, P0c, qc, f_rows(nx), axle, lever, cfg, True
+    )
+    dl = float(np.median(xs[:, ILX]))
+    sigma = float(math.sqrt(max(float(var_last[ILX]), 0.0)))
+    if not (math.isfinite(dl) and math.isfinite(sigma)):
+        return LeverCheck(math.nan, math.inf, z_gate)
+    return LeverCheck(dl, sigma, z_gate)
