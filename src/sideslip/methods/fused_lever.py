@@ -20,7 +20,8 @@ The second test is there because the tyre-free kinematics have model errors of t
 that the first does not carry: at a true 0 the pass read +0.06 to +0.21 m on our simulated
 drives, beyond 3 sigma on the race lap (+0.16 +- 0.02 m) and the 15-minute endurance drive
 (+0.21 +- 0.05 m, where moving the antenna took beta 0.015 -> 0.040 deg and the likelihood
-with the tyres rose by 209); for antennas truly 0.5 m off it fell by 46 to 489.
+with the tyres rose by 209); for antennas truly 0.5 m off it fell by 36 to 489 in six of
+seven cells printed (benchmarks/results/fused_accuracy.md, session 8).
 """
 
 from __future__ import annotations
