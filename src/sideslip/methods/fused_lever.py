@@ -21,7 +21,11 @@ that the first does not carry: at a true 0 the pass read +0.06 to +0.21 m on our
 drives, beyond 3 sigma on the race lap (+0.16 +- 0.02 m) and the 15-minute endurance drive
 (+0.21 +- 0.05 m, where moving the antenna took beta 0.015 -> 0.040 deg and the likelihood
 with the tyres rose by 209); for antennas truly 0.5 m off it fell by 36 to 489 in six of
-seven cells printed (benchmarks/results/fused_accuracy.md, session 8).
+seven cells printed.  On the race lap most of it is the node inputs' timing: block means lag
+their interval by half a row, which against the Doppler reads as an antenna ``v dt / 2``
+ahead, so the pass finds the antenna effective for the estimator rather than the geometric
+one; on the endurance drive it explains about 0.03 m of the 0.21 m, the rest is not
+known (benchmarks/results/fused_accuracy.md, session 8).
 """
 
 from __future__ import annotations
