@@ -92,8 +92,9 @@ which the random walk, white, does not.  With Doppler and fixes the smoother als
 file's antenna position (``check_doppler_lever``, :mod:`sideslip.methods.fused_lever`): an
 antenna ``dl_x`` ahead of where the file says adds ``r dl_x`` to the Doppler's lateral
 velocity, which reads as slip; a pass without the tyres finds ``dl_x``, and the antenna is
-moved only where that pass puts it beyond ``doppler_lever_z`` sigmas and the filter with the
-tyres predicts the Doppler better with it moved (``params["assumed"]["gnss_lever_x"]``).
+moved only where that pass puts it beyond ``doppler_lever_z`` sigmas (less the part the node
+inputs' half-row timing accounts for) and the filter with the tyres predicts the Doppler
+better with it moved (``params["assumed"]["gnss_lever_x"]``).
 
 Discretisation and cost: the smoother steps on nodes every ``step_s`` (inputs averaged in
 between, states linearly interpolated back to every row); the filter steps on every row.
@@ -660,7 +661,7 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
         # with the tyres too: a misplaced antenna's r dl_x reads as slip
         lever_check = check_lever(
             before, g_age, without_tyres(after), nz.lever_prior_sigma_m, nz.lever_psd,
-            nz.latency_prior_sigma_s, nz.latency_psd, nz.doppler_lever_z,
+            nz.latency_prior_sigma_s, nz.latency_psd, nz.doppler_lever_z, drive.dt_median,
         )  # fmt: skip
         if lever_check.found:
             file_x = float(lever[0])

@@ -16,16 +16,17 @@ sigma.  The file's antenna is kept unless the drive contradicts it twice: where 
 exceeds ``z_gate`` sigmas, and the forward filter with the tyres predicts the Doppler better
 with the antenna moved by ``dl_x`` than with the file's, by more than ``z_gate^2`` in
 ``-2 log L`` (``LeverCheck.gain``, computed by the caller).
-The second test is there because the tyre-free kinematics have model errors of their own
-that the first does not carry: at a true 0 the pass read +0.06 to +0.21 m on our simulated
-drives, beyond 3 sigma on the race lap (+0.16 +- 0.02 m) and the 15-minute endurance drive
-(+0.21 +- 0.05 m, where moving the antenna took beta 0.015 -> 0.040 deg and the likelihood
-with the tyres rose by 209); for antennas truly 0.5 m off it fell by 36 to 489 in six of
-seven cells printed.  On the race lap most of it is the node inputs' timing: block means lag
-their interval by half a row, which against the Doppler reads as an antenna ``v dt / 2``
-ahead, so the pass finds the antenna effective for the estimator rather than the geometric
-one; on the endurance drive it explains about 0.03 m of the 0.21 m, the rest is not
-known (benchmarks/results/fused_accuracy.md, session 8).
+Before the first test the part of ``dl_x`` that is the node inputs' timing is taken out:
+each node's inputs are the mean of its rows, half a row behind the interval they propagate
+over, so against the Doppler the kinematics run half a row late, which in turns reads as an
+antenna ``v dt / 2`` ahead (the race lap with the antenna where the file says: +0.163 +-
+0.023 m found, 0.108 m of it this; fused_accuracy.md session 8).  The estimate, which has the
+same timing, is moved by the whole ``dl_x``.  The second test is there because the tyre-free
+kinematics have model errors beyond that which the first does not carry: on the 15-minute
+endurance drive, antenna where the file says, the pass read +0.21 +- 0.05 m (0.03 m of it
+the timing), and moving the antenna would have taken beta 0.015 -> 0.040 deg; with the tyres
+the likelihood rose by 209.  For antennas truly 0.5 m off it fell by 36 to 489 in six of
+seven cells printed.
 """
 
 from __future__ import annotations
@@ -37,7 +38,7 @@ from typing import Any
 import numpy as np
 
 from sideslip.methods import fused_engine as eng
-from sideslip.models.fused_process import ILX, ILY, ITAU, NX_CORE, NX_GNSS_CAL, f_rows
+from sideslip.models.fused_process import ILX, ILY, ITAU, IVX, NX_CORE, NX_GNSS_CAL, f_rows
 
 __all__ = ["LeverCheck", "check_lever", "without_tyres"]
 
@@ -56,10 +57,13 @@ class LeverCheck:
     sigma_m: float
     z_gate: float
     gain: float = math.nan
+    timing_m: float = 0.0  # the part of dl_x_m the node inputs' half-row lag accounts for
 
     @property
     def z(self) -> float:
-        return abs(self.dl_x_m) / self.sigma_m if self.sigma_m > 0.0 else math.inf
+        """Sigmas between the antenna found and the file's, less what the timing accounts for."""
+        off = abs(self.dl_x_m - self.timing_m)
+        return off / self.sigma_m if self.sigma_m > 0.0 else math.inf
 
     @property
     def found(self) -> bool:
@@ -75,7 +79,8 @@ class LeverCheck:
     def note(self) -> str:
         found = (
             f"tyre-free against the Doppler: antenna {self.dl_x_m:+.3f} +- {self.sigma_m:.3f} m "
-            f"ahead of the file's ({self.z:.1f} sigma"
+            f"ahead of the file's, {self.timing_m:+.3f} m of it the inputs' timing "
+            f"({self.z:.1f} sigma"
         )
         if not self.found:
             return f"{found}, within {self.z_gate:g}): the file's kept"
@@ -89,6 +94,7 @@ class LeverCheck:
         return {
             "gnss_lever_x_tyre_free_m": self.dl_x_m if found else None,
             "gnss_lever_x_tyre_free_m_sigma": self.sigma_m if found else None,
+            "gnss_lever_x_timing_m": self.timing_m,
             "gnss_lever_x_neg2ll_gain": self.gain if math.isfinite(self.gain) else None,
             "gnss_lever_x_applied_m": self.dl_x_m if self.applied else 0.0,
         }
@@ -114,13 +120,20 @@ def check_lever(
     latency_prior_sigma_s: float,
     latency_psd: float,
     z_gate: float,
+    row_dt_s: float,
 ) -> LeverCheck:
     """The smoother of :func:`sideslip.methods.fused_engine.run_nodes` (``before``, ``g_age``
     as its arguments; ``free`` its trailing arguments with the core states only, from
     :func:`without_tyres`) once more, with the antenna's lever-arm error (prior
     ``N(0, lever_prior_sigma_m)``, random walk ``lever_psd``) and the fixes' latency
     (likewise) as states; ``dl_x`` is the smoothed states' median, its sigma the last node's
-    (a constant's smoothed sigma)."""
+    (a constant's smoothed sigma).
+
+    ``row_dt_s`` (the drive's row interval) sizes the part of ``dl_x`` that is the node
+    inputs' timing: each node's inputs are the mean of its rows, centred half a row before
+    the interval they propagate over, so against the Doppler the kinematics run
+    ``row_dt_s / 2`` late, which in a turn reads as ``r v row_dt_s / 2``, an antenna
+    ``v row_dt_s / 2`` ahead (v weighted by r^2, as the turns inform dl_x)."""
     g_e, g_n, pstd, ve, vn, vstd, x0, P0, q, _, axle, lever, cfg, _ = free
     nx = NX_CORE + NX_GNSS_CAL
     x0c = np.zeros(nx)
@@ -143,4 +156,7 @@ def check_lever(
     sigma = float(math.sqrt(max(float(var_last[ILX]), 0.0)))
     if not (math.isfinite(dl) and math.isfinite(sigma)):
         return LeverCheck(math.nan, math.inf, z_gate)
-    return LeverCheck(dl, sigma, z_gate)
+    r2 = np.square(before[1][:, 0])  # the gyro's z rate at the nodes
+    v_turns = float(np.sum(r2 * xs[:, IVX]) / np.sum(r2)) if np.sum(r2) > 0.0 else 0.0
+    timing = v_turns * row_dt_s / 2.0 if math.isfinite(v_turns) else 0.0
+    return LeverCheck(dl, sigma, z_gate, timing_m=timing)

@@ -179,11 +179,11 @@ class FusedSettings:
     identify_doppler_lever: bool = False
     # with Doppler and fixes (smoother): the antenna's longitudinal lever arm checked against
     # the Doppler with the tyres switched off (sideslip.methods.fused_lever); the file's is
-    # kept unless the drive puts the antenna more than doppler_lever_z sigmas from it and,
-    # with the tyres, the moved antenna lowers the Doppler's -2 log L by more than
-    # doppler_lever_z^2.  The 16 comparison drives x 3 files with the antenna 0.5 m ahead /
-    # behind: beta mean 0.144 -> 0.101 / 0.193 -> 0.130 deg, with it where the file says
-    # 0.0482 -> 0.0482 (fused_accuracy.md)
+    # kept unless the drive puts the antenna more than doppler_lever_z sigmas from it (less
+    # the node inputs' half-row timing) and, with the tyres, the moved antenna lowers the
+    # Doppler's -2 log L by more than doppler_lever_z^2.  The 16 comparison drives x 3 files
+    # with the antenna 0.5 m ahead / behind: beta mean 0.144 -> 0.105 / 0.193 -> 0.130 deg,
+    # with it where the file says 0.0482 -> 0.0482 (fused_accuracy.md)
     check_doppler_lever: bool = True
     doppler_lever_z: float = 3.0
     # positions only: the receiver's latency from the fixes' speed against the wheels
