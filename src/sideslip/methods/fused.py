@@ -20,8 +20,8 @@ bank changes only as the body rolls (seed 003: roll = suspension roll + bank), a
 walk is left with the accelerometer's drift (banked_turn without GNSS: gyro bias 0.083 rad/s
 and beta RMSE 0.41 deg with the random walk alone, 0.0015 rad/s and 0.012 deg with the roll
 gyro, 0.007 with the changes below).  The smoother with GNSS Doppler takes the roll gyro's
-bank too, with c_y's remaining random walk read from the drive (below); with GNSS positions
-only, the same as without GNSS; the causal filter with Doppler keeps c_y a random walk.
+bank too, with c_y's remaining random walk read from the drive (below), and so does the
+causal filter; with GNSS positions only, the same as without GNSS.
 Without GNSS the gyro scale factor is held at 1 (it is identified against the GNSS course,
 seed 001), in the smoother the wheel-speed scale too (identified against the GNSS speed, seed
 004).
@@ -86,7 +86,10 @@ drive: the value, searched down from the prior ``accel_vrw_psd`` a factor of two
 whose forward filter predicts the Doppler velocities best (``identify_accel_vrw``,
 :mod:`sideslip.methods.fused_vrw`; ``params["assumed"]["accel_vrw"]`` gives the evidence),
 and then, where the roll gyro drives the bank, c_y's random walk the same way
-(``identify_cy_psd``, ``params["assumed"]["cy_psd"]``).
+(``identify_cy_psd``, ``params["assumed"]["cy_psd"]``).  The causal filter does the same:
+its states stay causal, its two noise levels are read from the whole drive, as are its roll
+gain and Doppler latency (calibrations of the car and the receiver; the identify_* settings
+set to false keep it strictly causal).
 ``beta_std`` then carries the slip offset of an ``accel_offset_sigma`` accelerometer offset,
 which the random walk, white, does not.  With Doppler and fixes the smoother also checks the
 file's antenna position (``check_doppler_lever``, :mod:`sideslip.methods.fused_lever`): an
@@ -469,6 +472,13 @@ def _config(
 def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings | None = None) -> Estimate:
     """Run the fused EKF (and RTS smoother when ``smooth``); see the module docstring."""
     nz = settings or FusedSettings()
+    if not smooth and not nz.whole_drive_calibration:
+        # strictly on-line: the file's roll gain, the receiver's stamps, the prior noise and
+        # c_y a random walk (the roll gyro's bias would need the whole drive)
+        nz = dataclasses.replace(
+            nz, identify_roll_gradient=False, identify_doppler_latency=False,
+            identify_accel_vrw=False, roll_gyro_bank_with_doppler=False,
+        )  # fmt: skip
     t = drive.t
     n = len(drive)
     wz, ax, ay = _hold(drive, "wz"), _hold(drive, "ax"), _hold(drive, "ay")
@@ -588,15 +598,17 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
         idx = np.append(idx, n - 1)
     tn = t[idx]
     # the road's bank rate (input of c_y) without GNSS: the roll gyro less the suspension's
-    # roll rate k_phi f_y'; the roll gyro's bias is the drive's mean roll rate off-line (the
-    # body ends a drive about as level as it starts: 1 deg over 60 s is 3e-4 rad/s), 0 in the
-    # causal filter (c_y's random walk carries the ramp g b_x).  With GNSS Doppler the
-    # smoother takes it too (FusedSettings.roll_gyro_bank_with_doppler) and reads c_y's
-    # remaining random walk from the drive (_identify_noise); the causal filter, and drives
-    # without wx, keep c_y a random walk
+    # roll rate k_phi f_y'; the roll gyro's bias is the drive's mean roll rate (the body ends
+    # a drive about as level as it starts: 1 deg over 60 s is 3e-4 rad/s), for the causal
+    # filter too, as a calibration read from the whole drive (with 0 there, c_y's random walk
+    # left to carry the ramp g b_x: cr_limit_ramp seed 11, 5 s multipath burst, file 30 %
+    # soft, fused_filter with Doppler 3.63 deg with 60 % inside 2 sigma; with the mean 1.31,
+    # 94 %).  With GNSS Doppler both take
+    # it too (FusedSettings.roll_gyro_bank_with_doppler) and read c_y's remaining random
+    # walk from the drive (_identify_noise); drives without wx keep c_y a random walk
     has_wx = "wx" in drive and bool(np.isfinite(drive["wx"]).any())
-    has_wx = has_wx and nz.roll_gyro_bank and (tyres_carry or (smooth and nz.roll_gyro_bank_with_doppler))
-    bx = float(np.mean(wx)) if smooth and has_wx else 0.0
+    has_wx = has_wx and nz.roll_gyro_bank and (tyres_carry or nz.roll_gyro_bank_with_doppler)
+    bx = float(np.mean(wx)) if has_wx and (smooth or nz.whole_drive_calibration) else 0.0
     road_roll = (wx - bx - k_phi * _backward_rate(t, fy_lp)) if has_wx else np.zeros(n)
     U = eng.block_means(idx, (wz, wx, wy, ax, ay, fy_lp, road_roll))
     del road_roll
@@ -651,7 +663,7 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     before = (tn, U, vw_n, *node_inputs, g_node)
     after = (gn["gnss_e"], gn["gnss_n"], gn["pstd"], gn["gnss_ve"], gn["gnss_vn"], gn["vstd"],
              x0, P0, q, f_rows(nx), axle, lever, cfg, smooth)  # fmt: skip
-    if smooth and has_vel and nz.identify_accel_vrw and g_node.size >= nz.accel_vrw_min_epochs:
+    if has_vel and nz.identify_accel_vrw and g_node.size >= nz.accel_vrw_min_epochs:
         for name, choice in _identify_noise(before, g_age, after, nz, vrw_floor, has_wx):
             notes[name] = choice.note()
     lever_check = None

@@ -23,12 +23,14 @@ class FusedSettings:
 
     step_s: float = 0.05  # s: node spacing (0: every row); inputs averaged between nodes
     accel_vrw_psd: float = 0.1  # m/s/sqrt(s): accelerometer noise, vibration, roll transients
-    # the smoother with GNSS Doppler reads the velocity random walk from the drive: the value
-    # (a factor of two apart, from accel_vrw_psd times min_factor to max_factor, never below
-    # the accelerometer's own white noise) whose forward filter predicts the Doppler
-    # velocities best (sideslip.methods.fused_vrw); accel_vrw_psd stays the prior, the
-    # causal filter's value (the whole drive's innovations would read the future) and the
-    # value without Doppler (positions answer a velocity error only through its integral)
+    # with GNSS Doppler the velocity random walk is read from the drive: the value (a factor
+    # of two apart, from accel_vrw_psd times min_factor to max_factor, never below the
+    # accelerometer's own white noise) whose forward filter predicts the Doppler velocities
+    # best (sideslip.methods.fused_vrw), for the causal filter too (a calibration read from
+    # the whole drive, as its roll gain and Doppler latency: 16 drives x 3 files, fused_filter
+    # mean 0.138 -> 0.110 deg with the roll gyro's bank below); accel_vrw_psd stays the prior
+    # and the value without Doppler (positions answer a velocity error only through its
+    # integral)
     identify_accel_vrw: bool = True
     accel_vrw_min_factor: float = 1.0 / 16.0
     accel_vrw_max_factor: float = 1.0
@@ -156,13 +158,21 @@ class FusedSettings:
     # ... in the smoother with GNSS Doppler too: the bank then follows the body's roll
     # instead of c_y's random walk, which in a steady turn let the Doppler's noise wander
     # into v_y (step_steer 0.029 -> 0.019 deg with cy_psd read from the drive,
-    # benchmarks/results/fused_accuracy.md); the causal filter keeps the random walk
+    # benchmarks/results/fused_accuracy.md); the causal filter too (the roll gyro's bias,
+    # the drive's mean roll rate, read from the whole drive as a calibration)
     roll_gyro_bank_with_doppler: bool = True
     # the roll gain from the roll gyro in the drive's lateral transients where it contradicts
     # the file's m h / (k - m g h) (sideslip.methods.roll_gyro_gradient; read from the whole
     # drive, for the causal filter too, as a calibration of the car): a file whose mass, CG
     # height and roll stiffness double the roll misreads the tyres' force by 15 % at the limit
     identify_roll_gradient: bool = True
+    # the causal filter (fused_filter) reads the car's and the receiver's calibrations from
+    # the whole drive, as the smoother does: the roll gain, the Doppler latency, the velocity
+    # and bank random walks and the roll gyro's bias; its states stay causal.  False: strictly
+    # on-line (the file's roll gain, the receiver's stamps, the prior noise, c_y a random
+    # walk).  Measured, 16 drives x 3 files with Doppler: fused_filter mean 0.138 -> 0.110 deg
+    # (fused_accuracy.md)
+    whole_drive_calibration: bool = True
     # without GNSS the smoother's axle forces are low-passed zero-phase and split with the
     # yaw acceleration (the transients are then the stiffness's only teacher; fused.fuse)
     tyres_only_transients: bool = True
