@@ -146,8 +146,10 @@ class FusedSettings:
     # use the steering angle (front-axle relation) when present.  Off: measured worse on
     # every Doppler drive but one (16 drives, right file, seed 0: mean 0.042 -> 0.193 deg;
     # step_steer 0.019 -> 0.789 and cr_step_steer 0.058 -> 0.916 with half the errors inside
-    # 2 sigma: with both axles free in stiffness, v_y and the two scales slide together to
-    # the scales' lower bound and the Doppler, down-weighted as an outlier, loses), and
+    # 2 sigma: in a long steady turn the Doppler gives the course, not the slip, since the
+    # heading drifts with the gyro bias, so the tyres set beta, and with both axles free in
+    # stiffness v_y and the two scales slide together to the scales' lower bound; taking
+    # the Doppler at full weight where the inertial check vouches for it changed nothing), and
     # without GNSS mixed (step_steer 0.019 -> 0.008, race_lap 0.086 -> 0.203,
     # fused_accuracy.md).  A tight stiffness prior (stiffness_prior_sigma 0.1) held
     # step_steer at 0.074
