@@ -80,12 +80,17 @@ def test_a_steady_turn_does_not_decide_the_lever_arm_and_the_file_is_kept():
     assert p["gnss_lever_x_applied_m"] == 0.0
 
 
-def test_the_check_runs_only_where_the_drive_has_doppler_and_fixes_in_the_smoother():
-    """The causal filter has no later samples to check against, so it keeps the file's."""
+def test_the_filter_takes_the_smoothers_verdict_and_a_kept_antenna_changes_nothing():
+    """The causal filter has no later samples to check against: it reports the smoother's
+    check, and where that kept the file's antenna (dlc_bank, antenna where the file says)
+    its estimate is the one without the check, to the last bit."""
     drive = sim_drive("dlc_bank")
-    est = fuse(drive, load_vehicle(drive.meta["vehicle"]), smooth=False)
-    assert "gnss_lever_x" not in est.params["assumed"]
-    assert "gnss_lever_x_tyre_free_m" not in est.params
+    v = load_vehicle(drive.meta["vehicle"])
+    est = fuse(drive, v, smooth=False)
+    assert est.params["assumed"]["gnss_lever_x"].startswith("the smoother's check")
+    assert est.params["gnss_lever_x_applied_m"] == 0.0
+    plain = fuse(drive, v, smooth=False, settings=OFF)
+    assert (est["beta"] == plain["beta"]).all()
 
 
 def test_a_false_tyre_free_offset_is_not_confirmed_by_the_tyres_and_the_file_is_kept():
@@ -145,3 +150,22 @@ def test_the_inputs_half_row_lag_is_taken_out_before_the_gate():
     assert abs(p["gnss_lever_x_tyre_free_m"]) > 3.0 * p["gnss_lever_x_tyre_free_m_sigma"]
     assert p["gnss_lever_x_applied_m"] == 0.0
     assert "of it the inputs' timing" in p["assumed"]["gnss_lever_x"]
+
+
+def test_the_causal_filter_takes_the_antenna_the_smoothers_check_finds():
+    """fused_filter has no later samples to check the antenna against, so with its
+    whole-drive calibrations it runs the smoother first and takes the antenna its check
+    moved: race_lap with the antenna 0.5 m ahead of the file's, measured 0.392 -> 0.131 deg
+    (bound: under half), inside 2 sigma; strictly on-line it keeps the file's."""
+    drive = _misplaced("race_lap", 0.5)
+    v = load_vehicle(drive.meta["vehicle"])
+    kept = fuse(drive, v, smooth=False, settings=OFF)
+    moved = fuse(drive, v, smooth=False)
+    assert moved.params["gnss_lever_x_applied_m"] == pytest.approx(0.605, abs=0.01)
+    assert moved.params["assumed"]["gnss_lever_x"].startswith("the smoother's check")
+    rmse_kept = metrics(drive, kept.series)["beta_rmse_deg"]
+    rmse_moved = metrics(drive, moved.series)["beta_rmse_deg"]
+    assert rmse_moved < 0.5 * rmse_kept, (rmse_moved, rmse_kept)
+    assert two_sigma_share(drive, moved) >= 0.95
+    online = fuse(drive, v, smooth=False, settings=FusedSettings(whole_drive_calibration=False))
+    assert "gnss_lever_x" not in online.params["assumed"]

@@ -97,7 +97,8 @@ antenna ``dl_x`` ahead of where the file says adds ``r dl_x`` to the Doppler's l
 velocity, which reads as slip; a pass without the tyres finds ``dl_x``, and the antenna is
 moved only where that pass puts it beyond ``doppler_lever_z`` sigmas (less the part the node
 inputs' half-row timing accounts for) and the filter with the tyres predicts the Doppler
-better with it moved (``params["assumed"]["gnss_lever_x"]``).
+better with it moved (``params["assumed"]["gnss_lever_x"]``).  The causal filter, with
+``whole_drive_calibration``, runs the smoother first and takes the antenna its check found.
 
 Discretisation and cost: the smoother steps on nodes every ``step_s`` (inputs averaged in
 between, states linearly interpolated back to every row); the filter steps on every row.
@@ -472,6 +473,15 @@ def _config(
 def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings | None = None) -> Estimate:
     """Run the fused EKF (and RTS smoother when ``smooth``); see the module docstring."""
     nz = settings or FusedSettings()
+    # the causal filter takes the antenna the smoother's check finds (a calibration of the
+    # installation read from the whole drive, as its noise levels are): the check needs the
+    # smoother's later samples, so the smoother runs first
+    smoother_lever: Estimate | None = None
+    if (
+        not smooth and nz.whole_drive_calibration and nz.check_doppler_lever
+        and not nz.identify_doppler_lever and "gnss_ve" in drive and "gnss_e" in drive
+    ):  # fmt: skip
+        smoother_lever = fuse(drive, vehicle, smooth=True, settings=nz)
     if not smooth and not nz.whole_drive_calibration:
         # strictly on-line: the file's roll gain, the receiver's stamps, the prior noise and
         # c_y a random walk (the roll gyro's bias would need the whole drive)
@@ -639,6 +649,13 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
             P0[ISW, ISW] = 1e-8
             q[ISW] = 0.0
     lever = np.array(vehicle.gnss_xyz, dtype=float)
+    lever_params: dict[str, Any] = {}
+    if smoother_lever is not None and "gnss_lever_x" in smoother_lever.params["assumed"]:
+        moved = float(smoother_lever.params.get("gnss_lever_x_applied_m") or 0.0)
+        lever[0] += moved
+        notes["gnss_lever_x"] = "the smoother's check, " + smoother_lever.params["assumed"]["gnss_lever_x"]
+        lever_params = {k: v for k, v in smoother_lever.params.items() if k.startswith("gnss_lever_x_")}
+    del smoother_lever
     if latency is not None:
         # the antenna's lateral lever arm from the same tyre-free fit (sideslip.gnss_latency),
         # with the file's value as the prior's mean
@@ -740,6 +757,7 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     node_params.update(dop_params)
     if lever_check is not None:
         node_params.update(lever_check.params())
+    node_params.update(lever_params)
     del xs, var, cov_vxvy  # the row outputs need only the columns copied above
     if rebuild:
         wz, wy = _hold(drive, "wz"), _hold(drive, "wy")
