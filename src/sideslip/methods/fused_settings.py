@@ -173,7 +173,7 @@ class FusedSettings:
     # and bank random walks and the roll gyro's bias; its states stay causal.  False: strictly
     # on-line (the file's roll gain, the receiver's stamps, the prior noise, c_y a random
     # walk), and with Doppler and fixes the antenna the smoother's check_doppler_lever
-    # finds (the smoother then runs first: fused_filter 248k -> 97k samples/s).  Measured,
+    # finds (the smoother then runs first: fused_filter 248k -> 98k samples/s).  Measured,
     # 16 drives x 3 files with Doppler: fused_filter mean 0.138 -> 0.110 deg; with the
     # antenna 0.5 m ahead / behind (right file) 0.212 / 0.228 -> 0.157 / 0.152
     # (fused_accuracy.md)
