@@ -88,8 +88,8 @@ whose forward filter predicts the Doppler velocities best (``identify_accel_vrw`
 and then, where the roll gyro drives the bank, c_y's random walk the same way
 (``identify_cy_psd``, ``params["assumed"]["cy_psd"]``).  The causal filter does the same:
 its states stay causal, its two noise levels are read from the whole drive, as are its roll
-gain and Doppler latency (calibrations of the car and the receiver; the identify_* settings
-set to false keep it strictly causal).
+gain and Doppler latency (calibrations of the car and the receiver;
+``whole_drive_calibration=false`` keeps it strictly causal).
 ``beta_std`` then carries the slip offset of an ``accel_offset_sigma`` accelerometer offset,
 which the random walk, white, does not.  With Doppler and fixes the smoother also checks the
 file's antenna position (``check_doppler_lever``, :mod:`sideslip.methods.fused_lever`): an
