@@ -560,6 +560,7 @@ def run_doppler_slip(drive: Drive, vehicle: Vehicle, use_roll: bool = True,
     "slip-corrected dead reckoning (no steering, no tyre data)",
     paper="seed 000 (Takikawa et al. 2021)",
     settings=DopplerSlipSettings,
+    accelerometer="own",
 )
 def doppler_slip(drive: Drive, vehicle: Vehicle, settings: DopplerSlipSettings | None = None
                  ) -> Estimate:
@@ -573,6 +574,7 @@ def doppler_slip(drive: Drive, vehicle: Vehicle, settings: DopplerSlipSettings |
     summary="doppler_slip without the roll term (G_y = psi' V; eq 3 without cos(roll))",
     paper="seed 000 (Takikawa et al. 2021)",
     settings=DopplerSlipSettings,
+    accelerometer="own",
 )
 def doppler_slip_noroll(drive: Drive, vehicle: Vehicle,
                         settings: DopplerSlipSettings | None = None) -> Estimate:

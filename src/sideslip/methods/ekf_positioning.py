@@ -483,6 +483,7 @@ _VEHICLE = ("lf", "lr")  # the rear track: see rear_track()
     "scale factors)",
     paper="seed 004",
     settings=EkfTuning,
+    accelerometer="cg_causal",
 )
 def ekf_wss_sas(drive: Drive, vehicle: Vehicle, settings: EkfTuning | None = None) -> Estimate:
     """Seed 004's GNSS/WSS/SAS EKF (see module docstring); optional column gnss_pos_std."""
@@ -497,6 +498,7 @@ def ekf_wss_sas(drive: Drive, vehicle: Vehicle, settings: EkfTuning | None = Non
     summary="seed 004's EKF plus the gyro yaw rate with a bias state",
     paper="seed 004 (+ gyro)",
     settings=EkfTuning,
+    accelerometer="cg_causal",
 )
 def ekf_wss_sas_imu(drive: Drive, vehicle: Vehicle, settings: EkfTuning | None = None) -> Estimate:
     """Seed 004's EKF with the gyro as a yaw-rate measurement (``wz = r + b_g``)."""

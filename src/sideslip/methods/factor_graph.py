@@ -561,6 +561,7 @@ def fg_batch(
     paper=PAPER,
     vehicle_params=VEHICLE_PARAMS,
     settings=FactorGraphSettings,
+    accelerometer="cg_causal",
 )
 def fg_lag(
     drive: Drive, vehicle: Vehicle, settings: FactorGraphSettings = DEFAULT_SETTINGS
@@ -583,6 +584,7 @@ def fg_lag(
     paper=PAPER,
     vehicle_params=VEHICLE_PARAMS,
     settings=FactorGraphSettings,
+    accelerometer="cg_causal",
 )
 def kf_linear(
     drive: Drive, vehicle: Vehicle, settings: FactorGraphSettings = DEFAULT_SETTINGS

@@ -113,6 +113,7 @@ def _integrate(t: NDArray, ay_m: NDArray, wz: NDArray, vx: NDArray, v_gate: floa
     summary="open-loop integration of beta' = a_y/v_x - r (drifts; the baseline)",
     paper="seed 003 (kinematic model)",
     settings=KinematicIntegrationSettings,
+    accelerometer="cg_causal",
 )
 def kinematic_integration(drive: Drive, vehicle: Vehicle,
                           settings: KinematicIntegrationSettings | None = None) -> Estimate:

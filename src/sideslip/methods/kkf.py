@@ -537,6 +537,7 @@ def _bias_walk(
     summary="kinematic Kalman filter [psi, b_gyro]: beta = GNSS course - integrated gyro",
     paper="seed 001 eqs 4, 6",
     settings=KkfSettings,
+    accelerometer="cg_causal",
 )
 def kkf(drive: Drive, vehicle: Vehicle, settings: KkfSettings | None = None) -> Estimate:
     """Kinematic Kalman filter of seed 001; see the module docstring."""

@@ -586,6 +586,7 @@ def run_mkf(
     paper="seed 001 eqs 1-3, 5",
     vehicle_params=("mass", "yaw_inertia", "lf", "lr", "cf", "cr"),
     settings=MkfSettings,
+    accelerometer="cg_causal",
 )
 def mkf(drive: Drive, vehicle: Vehicle, settings: MkfSettings | None = None) -> Estimate:
     """Model-based Kalman filter of seed 001; see the module docstring."""

@@ -138,6 +138,7 @@ def identify_from_kkf(
     paper="seed 001 sec. VI",
     vehicle_params=("mass", "yaw_inertia", "lf", "lr", "cf", "cr"),
     settings=MkfSettings,
+    accelerometer="cg_causal",
 )
 def mkf_adaptive(drive: Drive, vehicle: Vehicle, settings: MkfSettings | None = None) -> Estimate:
     """MKF rerun with cornering stiffness identified from the KKF; see the module docstring."""

@@ -462,6 +462,7 @@ def _fresh_residual(values: FloatArray, fresh: NDArray[np.bool_]) -> FloatArray:
     paper="seed 003 (eqs 10-17)",
     vehicle_params=MODEL_PARAMS,
     settings=BicycleObserverSettings,
+    accelerometer="cg_causal",
 )
 def obs_bicycle(drive: Drive, vehicle: Vehicle,
                 settings: BicycleObserverSettings | None = None) -> Estimate:
@@ -485,6 +486,7 @@ def obs_bicycle(drive: Drive, vehicle: Vehicle,
     paper="seed 003 (eqs 18-30)",
     vehicle_params=ROLL_PARAMS,
     settings=KinematicObserverSettings,
+    accelerometer="cg_causal",
 )
 def obs_kinematic(drive: Drive, vehicle: Vehicle,
                   settings: KinematicObserverSettings | None = None) -> Estimate:
@@ -544,6 +546,7 @@ def _modified(drive: Drive, vehicle: Vehicle, st: BicycleObserverSettings, compe
     paper="seed 003 (eqs 31-39, 61-62)",
     vehicle_params=(*MODEL_PARAMS, *ROLL_PARAMS[5:]),
     settings=BicycleObserverSettings,
+    accelerometer="cg_causal",
 )
 def obs_modified(drive: Drive, vehicle: Vehicle,
                  settings: BicycleObserverSettings | None = None) -> Estimate:
@@ -559,6 +562,7 @@ def obs_modified(drive: Drive, vehicle: Vehicle,
     paper="seed 003 (eqs 31-39)",
     vehicle_params=MODEL_PARAMS,
     settings=BicycleObserverSettings,
+    accelerometer="cg_causal",
 )
 def obs_modified_nocomp(drive: Drive, vehicle: Vehicle,
                         settings: BicycleObserverSettings | None = None) -> Estimate:

@@ -517,6 +517,7 @@ def roll_index_health(inp: Inputs, est: RollEstimate, imu_fresh: BoolArray | Non
     paper="seed 003 (eqs 41-61)",
     vehicle_params=ROLL_PARAMS,
     settings=RollSettings,
+    accelerometer="cg_causal",
 )
 def roll_index(drive: Drive, vehicle: Vehicle, settings: RollSettings | None = None
                ) -> Estimate:
@@ -551,6 +552,7 @@ def roll_index(drive: Drive, vehicle: Vehicle, settings: RollSettings | None = N
     paper="seed 003 (eqs 46, 49-58; Tseng)",
     vehicle_params=ROLL_PARAMS[:-1],
     settings=RollSettings,
+    accelerometer="cg_causal",
 )
 def roll_dfc(drive: Drive, vehicle: Vehicle, settings: RollSettings | None = None) -> Estimate:
     """Tseng's dynamic bank estimate as roll, and the bank without suspension roll.
