@@ -27,13 +27,19 @@ def test_force_low_pass_is_as_short_as_the_accelerometer_noise_allows():
 
 
 def test_a_bad_setting_is_one_clear_error():
-    """Every numeric field must be finite and > 0 (step_s >= 0); the message names it."""
+    """Every numeric field must be finite and > 0 (step_s, offset_level_share >= 0); the message
+    names it."""
     with pytest.raises(ValueError, match=r"FusedSettings.force_noise_sigma = 0.0: expected a finite number > 0"):
         FusedSettings(force_noise_sigma=0.0)
     with pytest.raises(ValueError, match=r"axle_curve_shape = 0.5: expected 0 \(brush curve\) or a Magic"):
         FusedSettings(axle_curve_shape=0.5)
     with pytest.raises(ValueError, match=r"FusedSettings.wheel_slip_stiffness = nan: expected"):
         FusedSettings(wheel_slip_stiffness=float("nan"))
+    with pytest.raises(ValueError, match=r"offset_level_share = -0.1: expected a finite number >= 0"):
+        FusedSettings(offset_level_share=-0.1)
+    with pytest.raises(ValueError, match=r"FusedSettings.offset_level_share = 1.5: expected <= 1"):
+        FusedSettings(offset_level_share=1.5)
+    assert FusedSettings(offset_level_share=0.0).offset_level_share == 0.0
 
 
 def test_force_noise_variance_is_the_drives_own_accelerometer_noise():

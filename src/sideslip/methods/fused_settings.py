@@ -130,6 +130,11 @@ class FusedSettings:
     # put 78 % (slalom_low_mu, offset drawn -0.42 m/s^2) and 88 % (race_lap) inside 2 sigma
     # at 0.15, 95 % and more at 0.25 (benchmarks/results/fused_accuracy.md)
     accel_offset_sigma: float = 0.25
+    # the share of the drive's typical lateral offset (median of g sin(bank) with the
+    # accelerometer's offset in it) that may be a tilted mount rather than road crossfall:
+    # with equal priors on both (about 1.5 deg each), the tilt's posterior mean is half the
+    # level (0: the offset's sigma is accel_offset_sigma alone)
+    offset_level_share: float = 0.5
     axle_min_speed: float = 3.0  # m/s: below this the slip angles are ill-defined
     # below axle_min_speed (pulling away, parking, reversing) the rear axle's sideways
     # velocity v_y - l_r r stands in for the slip angle's relation: it is -|v_x| f_r / C_r
@@ -281,9 +286,15 @@ class FusedSettings:
                         "Magic Formula shape factor > 1"
                     )
                 continue
-            ok = math.isfinite(value) and (value >= 0 if f.name == "step_s" else value > 0)
+            zero_ok = f.name in ("step_s", "offset_level_share")
+            ok = math.isfinite(value) and (value >= 0 if zero_ok else value > 0)
             if not ok:
-                raise ValueError(f"FusedSettings.{f.name} = {value!r}: expected a finite number > 0")
+                expected = ">= 0" if zero_ok else "> 0"
+                raise ValueError(f"FusedSettings.{f.name} = {value!r}: expected a finite number {expected}")
+        if self.offset_level_share > 1.0:
+            raise ValueError(
+                f"FusedSettings.offset_level_share = {self.offset_level_share!r}: expected <= 1"
+            )
         if self.adapt_max < 1.0:
             raise ValueError(f"FusedSettings.adapt_max = {self.adapt_max!r}: expected >= 1")
         if self.accel_vrw_min_factor > 1.0:
