@@ -421,3 +421,20 @@ def test_the_filter_kernel_is_compiled_once_for_drives_from_a_file_and_from_memo
     assert len(set(ekf_loop.signatures) - before) <= 1 and len(ekf_loop.signatures) >= 1
     np.testing.assert_array_equal(results[0], results[2])
     np.testing.assert_array_equal(results[1], results[3])
+
+
+@pytest.mark.commonroad
+@pytest.mark.parametrize("name", ["ekf_wss_sas", "ekf_wss_sas_imu"])
+def test_at_the_grip_limit_beta_std_covers_the_sliding_tyres(name: str) -> None:
+    """cr_limit_ramp (CommonRoad's multi-body BMW ramping up to mu 0.6): the kinematic model
+    misses a slip of up to 4 deg; its linear slip term put 75 / 70 % of the beta errors inside
+    2 sigma.  Where the NIS test calls the model unusable the slip term grows up to three
+    times (the brush model's sliding limit): 100 / 96 % (seeds 0 and 1).  Bound: issue 15's
+    0.90; the model does fail here (beta RMSE above 1.5 deg)."""
+    pytest.importorskip("vehiclemodels", reason="needs the optional commonroad extra")
+    d = sim_drive("cr_limit_ramp", 0)
+    est = run_method(name, d, load_vehicle(d.meta["vehicle"]))
+    fast = d["ref_vx"] > 5.0
+    err = np.abs(est["beta"] - d["ref_beta"])[fast]
+    assert math.degrees(np.sqrt(np.mean(err**2))) > 1.5
+    assert np.mean(err < 2 * est["beta_std"][fast]) >= 0.90
