@@ -26,6 +26,7 @@ from sideslip.calibrate.roll import file_roll_gradient, misalignment_fits, roll_
 from sideslip.calibrate.sensors import gyro_bias_scale, wheel_speed_scale
 from sideslip.drive import SPEED_COLUMNS, Drive
 from sideslip.errors import InputError
+from sideslip.imu_lever import drive_at_cg
 from sideslip.vehicle import G, Vehicle, vehicle_to_toml
 
 __all__ = ["Calibration", "Fitted", "calibrate", "calibration_toml"]
@@ -88,6 +89,8 @@ def calibrate(drive: Drive, vehicle: Vehicle) -> Calibration:
     """Identify the vehicle and sensor calibration of ``drive`` starting from ``vehicle``."""
     _need_columns(drive)
     vehicle.need("mass", "lf", "lr")
+    # the accelerometer as read at the CG, where the force balances hold (sideslip.imu_lever)
+    drive, _ = drive_at_cg(drive, vehicle, causal=False)
     sig = prepare(drive, vehicle.gnss_xyz)
     wheel = wheel_speed_scale(sig)
     bias, gscale = gyro_bias_scale(sig)
