@@ -10,8 +10,8 @@ Navigation Technology*, 2nd ed., 2004, sec. 10.4.2 on lever-arm effects), so
 
     f_cg = f_imu - omega' x l - (omega (omega . l) - l |omega|^2)
 
-with ``omega = (p, q, r)`` = (wx, wy, wz), the x and y rows written out below.  A phone on the windscreen
-1.2 m ahead of the CG reads ``r' l_x`` more lateral force in every transient (1 rad/s^2 on a
+with ``omega = (p, q, r)`` = (wx, wy, wz), the x and y rows written out below.  A phone on
+the windscreen 1.2 m ahead of the CG reads ``r' l_x`` more lateral force in every transient (1 rad/s^2 on a
 race lap: 1.2 m/s^2) and ``r^2 l_x`` less longitudinal force in every turn.  Estimators whose
 kinematics and force balance hold at the CG take the moved force: :func:`drive_at_cg` gives
 it to every registered method that does not read ``imu_xyz`` itself
@@ -34,6 +34,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sideslip.drive import Drive
+from sideslip.signals import hold
 from sideslip.vehicle import Vehicle
 
 FloatArray = NDArray[np.float64]
@@ -96,24 +97,6 @@ def specific_force_at_cg(
     return np.asarray(ax_cg, dtype=float), np.asarray(ay_cg, dtype=float)
 
 
-def _held(t: FloatArray, col: FloatArray | None) -> FloatArray:
-    """A rate column with its gaps (NaN rows of a slower sensor, dropouts) held at the last
-    sample (the first sample before it), 0 where the column is absent or empty."""
-    if col is None:
-        return np.zeros(t.size)
-    v = np.asarray(col, dtype=float)
-    ok = np.isfinite(v)
-    if not ok.any():
-        return np.zeros(t.size)
-    if ok.all():
-        return v
-    idx = np.where(ok, np.arange(v.size), 0)
-    np.maximum.accumulate(idx, out=idx)
-    first = int(np.argmax(ok))
-    idx[:first] = first
-    return v[idx]
-
-
 def drive_at_cg(drive: Drive, vehicle: Vehicle, causal: bool) -> tuple[Drive, str | None]:
     """The drive with its ``ax``/``ay`` moved from ``vehicle.imu_xyz`` to the CG (for a
     ``causal`` method with the trailing angular acceleration: it stays causal), and a note for
@@ -123,7 +106,8 @@ def drive_at_cg(drive: Drive, vehicle: Vehicle, causal: bool) -> tuple[Drive, st
     if lever == (0.0, 0.0, 0.0) or not ("ax" in drive or "ay" in drive):
         return drive, None
     t = drive.t
-    wx, wy, wz = (_held(t, drive[k] if k in drive else None) for k in ("wx", "wy", "wz"))
+    # gyro gaps held at the last sample (0 where a rate is absent)
+    wx, wy, wz = (hold(drive[k], t)[0] if k in drive else np.zeros(t.size) for k in ("wx", "wy", "wz"))
     ax = drive["ax"] if "ax" in drive else np.zeros(t.size)
     ay = drive["ay"] if "ay" in drive else np.zeros(t.size)
     arm = (lever[0], lever[1], lever[2])
