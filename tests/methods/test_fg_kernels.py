@@ -53,20 +53,30 @@ def test_chain_factors_equal_the_numpy_formulation():
     assert gap.sum() == 1 and low.any() and ok_ay.sum() < n - 50
 
 
-def test_one_sigma_is_the_inflated_variance_plus_the_stiffness_term():
+def test_one_sigma_is_the_inflated_variance_plus_the_stiffness_limit_and_offset_terms():
     rng = np.random.default_rng(4)
     n = 1000
     x = 0.02 * rng.normal(size=(n, 2))
     var = rng.uniform(-1e-9, 1e-4, size=(n, 2))  # tiny negative round-off is clipped
     inflation = rng.uniform(1.0, 3.0, n)
+    health = rng.uniform(0.0, 1.0, n)
     delta, v = 0.03 * rng.normal(size=n), rng.uniform(3.0, 40.0, n)
-    beta_std, r_std = one_sigma(x, var, inflation, delta, v, VEHICLE.lf, VEHICLE.lr, 0.3)
+    beta_std, r_std = one_sigma(
+        x, var, inflation, delta, v, VEHICLE.lf, VEHICLE.lr, 0.3, health, 0.5, 0.002
+    )
     alpha_f = delta - x[:, 0] - VEHICLE.lf * x[:, 1] / v
     alpha_r = VEHICLE.lr * x[:, 1] / v - x[:, 0]
-    vb = np.maximum(var[:, 0], 0.0) * inflation + (0.3 * np.maximum(abs(alpha_f), abs(alpha_r))) ** 2
-    np.testing.assert_allclose(beta_std, np.sqrt(vb), rtol=1e-14)
+    slip = np.maximum(abs(alpha_f), abs(alpha_r))
+    rel2 = 0.3**2 + (0.5 * health) ** 2  # hypot(stiffness, health x limit) on the slip angle
+    vb = np.maximum(var[:, 0], 0.0) * inflation + rel2 * slip**2 + 0.002**2
+    np.testing.assert_allclose(beta_std, np.sqrt(vb), rtol=1e-13)
     np.testing.assert_allclose(r_std, np.sqrt(np.maximum(var[:, 1], 0.0) * inflation), rtol=1e-14)
-    # no inflation given, no stiffness term: the plain 1-sigma
-    b0, r0 = one_sigma(x, var, np.ones(0), delta, v, VEHICLE.lf, VEHICLE.lr, 0.0)
+    # no health given: the limit term is off whatever its setting
+    b1, _ = one_sigma(x, var, inflation, delta, v, VEHICLE.lf, VEHICLE.lr, 0.3, np.zeros(0), 0.5, 0.0)
+    np.testing.assert_allclose(
+        b1, np.sqrt(np.maximum(var[:, 0], 0.0) * inflation + (0.3 * slip) ** 2), rtol=1e-13
+    )
+    # no inflation, no stiffness, limit or offset term: the plain 1-sigma
+    b0, r0 = one_sigma(x, var, np.ones(0), delta, v, VEHICLE.lf, VEHICLE.lr, 0.0, health, 0.0, 0.0)
     np.testing.assert_array_equal(b0, np.sqrt(np.maximum(var[:, 0], 0.0)))
     np.testing.assert_array_equal(r0, np.sqrt(np.maximum(var[:, 1], 0.0)))

@@ -53,7 +53,10 @@ override. Model sigmas are per ``reference_dt`` step and scale with sqrt(dt/refe
 Honest 1-sigma: block sums of the graph's Kalman innovations over 2 s windows inflate the
 variance where the model stops fitting (``health``), and a vehicle file's stiffness error,
 which no test on the drive can see, adds (``stiffness_rel_sigma`` x slip angle)^2 to beta's
-variance.
+variance; where the test fails, the linear tyre relation itself is in doubt (an axle near its
+friction slips more than F / C: ``limit_rel_sigma`` x health joins that relative error), and
+an accelerometer offset the a_y factor reads as tyre force adds its slip
+(``accel_offset_sigma`` x m / (C_f + C_r)).
 
 Accelerometer.  The paper uses the lateral accelerometer raw; so do we.  It reads specific
 force: the tyre forces over m plus g sin(suspension roll).  The model's right side C x + D delta
@@ -518,20 +521,29 @@ def _estimate(
     out: dict[str, FloatArray] = {"beta": x[:, 0].copy(), "r": x[:, 1].copy()}
     inn: dict[str, FloatArray] = {}
     inflation = np.ones(0)
+    health = np.zeros(0)
     if innovations is not None:
         nu, S = innovations
         check = block_consistency(drive.t, nu[:, :2], S[:, :2], causal)
         inflation = check.inflation
-        out["health"] = check.health
+        health = check.health
+        out["health"] = health
         params["health"] = {**check.summary(drive.t), "test": (
             f"sums of the graph's Kalman innovations (gyro, a_y) over {BLOCK_S:g} s blocks, "
             f"chi2 99 % over {WINDOW_S:g} s windows; variance x NIS ratio where it fails")}
         inn = {"wz": nu[:, 0], "wz_s": S[:, 0], "ay": nu[:, 1], "ay_s": S[:, 1]}
     if settings.stiffness_rel_sigma > 0:
         params["stiffness_rel_sigma"] = settings.stiffness_rel_sigma
+    offset_beta = settings.accel_offset_sigma * vehicle.mass / (vehicle.cf + vehicle.cr)
+    params["beta_std_terms"] = {
+        "stiffness_rel_sigma": settings.stiffness_rel_sigma,
+        "limit_rel_sigma_at_health_1": settings.limit_rel_sigma if health.size else 0.0,
+        "accel_offset_beta_rad": offset_beta,
+    }
     out["beta_std"], out["r_std"] = one_sigma(
         x, var, inflation, prep.inputs.delta, prep.inputs.v_measurement, vehicle.lf, vehicle.lr,
-        settings.stiffness_rel_sigma,
+        settings.stiffness_rel_sigma, health, settings.limit_rel_sigma,
+        offset_beta,
     )  # fmt: skip
     return Estimate(name, drive.t, out, params, inn)
 

@@ -107,26 +107,35 @@ def one_sigma(
     lf: float,
     lr: float,
     stiffness_rel_sigma: float,
+    health: FloatArray,
+    limit_rel_sigma: float,
+    offset_beta_sigma: float,
 ) -> tuple[FloatArray, FloatArray]:
     """1-sigma of beta and r, one pass per row: the solver's variances (clipped at 0) times
-    the consistency ``inflation`` (empty: none), plus for beta (stiffness_rel_sigma x the
-    larger axle slip angle)^2 with alpha_f = delta - beta - lf r / V, alpha_r = lr r / V - beta
-    at the a_y factor's speed V (:mod:`sideslip.methods.factor_graph`)."""
+    the consistency ``inflation`` (empty: none), plus for beta (s x the larger axle slip
+    angle)^2 with alpha_f = delta - beta - lf r / V, alpha_r = lr r / V - beta at the a_y
+    factor's speed V and s = hypot(stiffness_rel_sigma, health x limit_rel_sigma) (``health``
+    empty: 0; :mod:`sideslip.methods.factor_graph`)."""
     n = x.shape[0]
     beta_std = np.empty(n)
     r_std = np.empty(n)
     inflate = inflation.size > 0
+    limit = health.size > 0 and limit_rel_sigma > 0.0
     for k in range(n):
         vb = var[k, 0] if not var[k, 0] < 0.0 else 0.0
         vr = var[k, 1] if not var[k, 1] < 0.0 else 0.0
         if inflate:
             vb = vb * inflation[k]
             vr = vr * inflation[k]
-        if stiffness_rel_sigma > 0.0:
+        rel2 = stiffness_rel_sigma * stiffness_rel_sigma
+        if limit:
+            rel2 += (health[k] * limit_rel_sigma) ** 2
+        if rel2 > 0.0:
             alpha_r = lr * x[k, 1] / v[k] - x[k, 0]
             alpha_f = delta[k] - x[k, 0] - lf * x[k, 1] / v[k]
-            a = stiffness_rel_sigma * max(abs(alpha_f), abs(alpha_r))
-            vb += a * a
+            a = max(abs(alpha_f), abs(alpha_r))
+            vb += rel2 * a * a
+        vb += offset_beta_sigma * offset_beta_sigma
         beta_std[k] = np.sqrt(vb)
         r_std[k] = np.sqrt(vr)
     return beta_std, r_std

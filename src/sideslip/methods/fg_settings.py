@@ -60,6 +60,25 @@ class FactorGraphSettings:
         it (measured: a file 30 % low leaves the windowed NIS inside its bound).  Users' files
         are 20-35 % off (nominal tyre data against the effective axle stiffness): 0.3 makes a
         file 30 % off a 1-sigma error.  0 trusts the file.
+    limit_rel_sigma : 1-sigma relative error of the *linear* tyre relation where the drive
+        rejects the model (``health``, 0 ... 1), combined with stiffness_rel_sigma as
+        hypot(stiffness_rel_sigma, health x limit_rel_sigma) on the same slip angle.  Past the
+        linear range an axle's slip for a given force exceeds the linear one F / C by the factor
+        3 (1 - (1 - u)^(1/3)) / u at a friction use u = |F| / (mu F_z) (brush model, Pacejka,
+        *Tire and Vehicle Dynamics*, 3rd ed. 2012, sec. 3.2.2: F / (mu F_z) = 1 - (1 - x)^3 with
+        x = C tan(alpha) / (3 mu F_z)): 1.24 at u = 0.5, 1.56 at 0.8, 1.79 at 0.9.  Neither mu
+        nor u is known to the graph, so 0.5 makes an axle at 80 % of its friction a 1-sigma
+        error and one at 95 % (factor 2.0) a 2-sigma one.  Measured (compare_methods.md's
+        CommonRoad slalom on mu 0.6, rear axle saturating, right file, seeds 0 / 1 / 3): share
+        of errors inside 2 sigma 0.86 / 0.87 / 0.86 without the term, 1.00 / 1.00 / 0.98 with it;
+        0.3: 0.95 / 0.96 / 0.95.  0 turns it off.
+    accel_offset_sigma : m/s^2, 1-sigma of a lateral accelerometer offset (a consumer MEMS
+        turn-on bias, 0.15, and g times a 1 deg mounting roll, 0.17; the same value as
+        :class:`~sideslip.methods.fused_settings.FusedSettings`).  The a_y factor reads it as
+        tyre force, a sideslip offset of accel_offset_sigma x m / (C_f + C_r) (the inverse of
+        d a_y / d beta in the paper's a_y row) that no test on the drive separates from a slip; added to
+        beta's variance (straights of the CommonRoad slalom: errors of 0.08-0.11 deg against
+        a 1-sigma of 0.04 deg without it).  0 turns it off.
     """
 
     preset: Preset = "auto"
@@ -77,6 +96,8 @@ class FactorGraphSettings:
     max_step: float = 0.25
     consistency: bool = True
     stiffness_rel_sigma: float = 0.3
+    limit_rel_sigma: float = 0.5
+    accel_offset_sigma: float = 0.25
 
     def __post_init__(self) -> None:
         if self.preset not in ("auto", *PRESETS):
@@ -100,6 +121,12 @@ class FactorGraphSettings:
                 f"FactorGraphSettings.stiffness_rel_sigma = {self.stiffness_rel_sigma!r}: "
                 "expected a number in [0, 1)"
             )
+        for name in ("limit_rel_sigma", "accel_offset_sigma"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not (
+                isinstance(value, int | float) and math.isfinite(value) and value >= 0
+            ):
+                raise ValueError(f"FactorGraphSettings.{name} = {value!r}: expected a number >= 0")
         if int(self.window) != self.window or self.window < 0:
             raise ValueError(
                 f"FactorGraphSettings.window = {self.window!r}: expected an integer >= 0"
