@@ -494,6 +494,20 @@ def run_doppler_slip(drive: Drive, vehicle: Vehicle, use_roll: bool = True,
     )
     beta_std = check.beta_std
     params["health"] = check.summary
+    if gain.applied and gain.intercept != 0.0:
+        # The eq-20 fit's intercept c.  The heading is fitted on the straights with the
+        # relation's value there (0 at G_y = 0), so a c left on the curves is the relation's
+        # own offset: a curvature of beta_r(G_y) the straight line does not follow (tyres
+        # leaving their linear range), which the self-check above cannot see because the
+        # innovation carries c while beta does not.  The line's error on the curves is of
+        # that size (cr_limit_ramp: c = 0.46 deg, the CG beta 0.9 deg off mid-ramp against a
+        # 1-sigma of 0.3, 73 % of the errors inside 2 sigma; with the term 100 %).  It fades to
+        # 0 towards G_y = 0, where the straights pin the relation.  Not kept: the scatter of
+        # the Doppler sideslip about the line beyond the course noise as a further term (it
+        # tripled the 1-sigma on the race lap, median 0.12 -> 0.40 deg at an RMSE of 0.23).
+        curve = np.minimum(np.abs(gy) / K_MIN_GY, 1.0)
+        beta_std = np.hypot(beta_std, np.where(forward, abs(gain.intercept) * curve, 0.0))
+        params["K_intercept_in_beta_std"] = True
 
     # --- dead reckoning (eqs 1-4) from the first GNSS fix ---------------------------------------
     yaw = fit.yaw
