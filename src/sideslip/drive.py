@@ -243,7 +243,7 @@ def validate_columns(
         i = int(np.argmax(steps <= 0))
         raise InputError(
             path,
-            f"expected time stamps strictly increasing, got {t[i + 1]!r} after {t[i]!r}",
+            f"expected time stamps strictly increasing, got {float(t[i + 1])!r} s after {float(t[i])!r} s",
             column="t",
             row=i + 2,
         )
