@@ -538,3 +538,28 @@ def test_a_ramp_to_the_grip_limit_widens_beta_std_by_the_fits_intercept(method: 
     assert math.degrees(err.max()) > 0.8  # confidently wrong before
     assert np.mean(err < 2 * est["beta_std"][fast]) >= 0.90
     assert math.degrees(np.median(est["beta_std"][fast])) < 1.5
+
+
+@pytest.mark.parametrize(
+    "scenario", ["slalom_low_mu", pytest.param("cr_limit_slalom", marks=pytest.mark.commonroad)]
+)
+def test_a_slalom_does_not_set_the_gyro_scale(scenario: str) -> None:
+    """In a slalom the yaw acceleration moves with the heading swing, so the transient slip the
+    steady relation leaves out read as a gyro gain: measured 1.11 +- 0.03 on the low-mu
+    slalom (truth 1.000) and, with the roll variant at the CommonRoad limit slalom seed 4,
+    1.14 +- 0.03 with beta 1.55 deg off (noroll 0.54).  With the heading fit's transient
+    nuisance the scale stays within 2 sigma (and 3 %) of the simulated one, and beta follows
+    (measured 0.031 and 0.61 deg)."""
+    from tests.conftest import sim_drive
+
+    if scenario.startswith("cr_"):
+        pytest.importorskip("vehiclemodels", reason="needs the optional commonroad extra")
+    seed = 4 if scenario.startswith("cr_") else 0
+    drive = sim_drive(scenario, seed)
+    est = run_doppler_slip(drive, load_vehicle(drive.meta["vehicle"]))
+    truth = 1.0 + drive.meta["truth_sensor"]["gyro_scale_factor"]  # measured / true, z axis
+    p = est.params
+    assert abs(p["gyro_scale"] - truth) < 2.0 * p["gyro_scale_sigma"]
+    assert abs(p["gyro_scale"] - truth) < 0.03
+    rmse = rms_deg((est["beta"] - drive["ref_beta"])[moving(drive)])
+    assert rmse < (0.05 if seed == 0 else 0.8)  # before: 0.086 and 1.55 deg

@@ -312,6 +312,8 @@ def fit_heading(
     course_offset: FloatArray | None = None,  # per sample (all samples, not only selected)
     still_rows: IntArray | None = None,
     wz_raw: FloatArray | None = None,
+    nuisance: FloatArray | None = None,  # per sample (all samples)
+    nuisance_sigma: float = float("inf"),
     knot_spacing_s: float = KNOT_SPACING_S,
     bias_rw: float = BIAS_RW,
     max_iter: int = 10,
@@ -322,6 +324,10 @@ def fit_heading(
     ``select``: which of ``samples`` may enter the fit (e.g. low lateral acceleration).
     ``course_offset``: rad per sample, subtracted from the course (antenna sideslip model).
     ``still_rows``/``wz_raw``: standstill rows and the raw gyro, for offset pseudo-measurements.
+    ``nuisance``: a regressor per sample whose coefficient (prior 1-sigma ``nuisance_sigma``)
+    joins the fit, e.g. the yaw acceleration for the transient sideslip the caller's model
+    leaves out; where it moves with the integrated gyro (a slalom) it takes ``s``'s place, so
+    ``s`` falls back to its prior instead of absorbing the model's error.
     With no usable course sample, the heading is the integrated gyro from 0 with the
     standstill offset (or 0) and the fit reports ``residual_std`` = inf.
     """
@@ -334,6 +340,8 @@ def fit_heading(
     y = samples.course[idx] - (course_offset[idx] if course_offset is not None else 0.0)
     sig = samples.sigma[idx]
     i_meas = integ[rows]
+    n_aux = 1 if nuisance is not None else 0
+    aux = nuisance[idx] if nuisance is not None else np.zeros(idx.size)
     # the design [1, i, -hat_integrals] / sigma = Z @ T with Z sparse (a few entries a row)
     # and T = [[I2, 0], [0, Q], [0, I_M]]: every product below is O(epochs + M^2), never the
     # dense (epochs, M) matrix (whose Gram matrix made the fit quadratic in the drive's length)
@@ -341,22 +349,28 @@ def fit_heading(
     sparse_path = M > DENSE_MAX_KNOTS
     Q = knot_cumulative(knots) if not sparse_path else np.zeros((0, M))
     inv_sig = sp.diags(1.0 / sig)
-    Z = sp.hstack([sp.csr_matrix(np.column_stack([np.ones(rows.size), i_meas]) / sig[:, None]),
-                   -(inv_sig @ pick), -(inv_sig @ part)]).tocsr()
-    T = np.zeros((2 + 2 * M, 2 + M) if not sparse_path else (0, 0))
+    blocks = [sp.csr_matrix(np.column_stack([np.ones(rows.size), i_meas]) / sig[:, None]),
+              -(inv_sig @ pick), -(inv_sig @ part)]
+    if n_aux:
+        blocks.append(sp.csr_matrix((aux / sig)[:, None]))
+    Z = sp.hstack(blocks).tocsr()
+    T = np.zeros((2 + 2 * M + n_aux, 2 + M + n_aux) if not sparse_path else (0, 0))
     if not sparse_path:
         T[0, 0] = T[1, 1] = 1.0
-        T[2:2 + M, 2:] = Q
-        T[2 + M:, 2:] = np.eye(M)
+        T[2:2 + M, 2:2 + M] = Q
+        T[2 + M:2 + 2 * M, 2:2 + M] = np.eye(M)
+        if n_aux:
+            T[-1, -1] = 1.0
 
     def gram(z: sp.csr_matrix) -> FloatArray:
         return np.asarray(T.T @ (z.T @ z).toarray() @ T, dtype=float)
 
     def predict(x: FloatArray) -> FloatArray:
-        kb = x[2:]
+        kb = x[2:2 + M]
         cum = (Q @ kb if not sparse_path else
                np.concatenate(([0.0], np.cumsum(0.5 * (kb[1:] + kb[:-1]) * np.diff(knots)))))
-        return np.asarray(x[0] + x[1] * i_meas - (pick @ cum + part @ kb), dtype=float)
+        out = x[0] + x[1] * i_meas - (pick @ cum + part @ kb)
+        return np.asarray(out + (x[-1] * aux if n_aux else 0.0), dtype=float)
     # standstill pseudo-measurements of the offset: 1-s block means of the raw gyro
     st_hat = sp.csr_matrix((0, M))
     st_y = np.zeros(0)
@@ -374,8 +388,8 @@ def fit_heading(
         st_y = means
         st_sig = np.full(means.size, max(noise, 1e-5)) / np.sqrt(counts[keep]) + 2e-5
     # priors: offset level, random walk between knots, scale correction
-    P = np.zeros((M + 1, 2 + M))
-    p_sig = np.zeros(M + 1)
+    P = np.zeros((M + 1 + n_aux, 2 + M + n_aux))
+    p_sig = np.zeros(M + 1 + n_aux)
     P[0, 1] = 1.0
     p_sig[0] = SCALE_PRIOR
     P[1, 2] = 1.0
@@ -384,27 +398,35 @@ def fit_heading(
         P[2 + j, 2 + j] = -1.0
         P[2 + j, 3 + j] = 1.0
         p_sig[2 + j] = bias_rw * np.sqrt((knots[j + 1] - knots[j]) / knot_spacing_s)
-    p_y = np.zeros(M + 1)
+    if n_aux:
+        P[-1, -1] = 1.0
+        p_sig[-1] = nuisance_sigma if np.isfinite(nuisance_sigma) else 1e6
+    p_y = np.zeros(M + 1 + n_aux)
 
     used = np.ones(rows.size, dtype=bool)
-    x = np.zeros(2 + M)
+    x = np.zeros(2 + M + n_aux)
     if still_rows is not None and st_y.size:
-        x[2:] = float(np.median(st_y))
+        x[2:2 + M] = float(np.median(st_y))
     # initial unwrap: the course relative to the integrated gyro drifts slowly
     d = np.unwrap(wrap_angle(y - i_meas)) + i_meas if rows.size else y
     resid_std = np.inf
     iterations = 0
     S = sp.diags(1.0 / st_sig) @ st_hat
     Pw = sp.csr_matrix(P / p_sig[:, None])
-    N_fixed_sp = (Pw.T @ Pw + sp.block_diag([sp.csr_matrix((2, 2)), S.T @ S])).tocsr()
+    N_fixed_sp = (Pw.T @ Pw + sp.block_diag([sp.csr_matrix((2, 2)), S.T @ S,
+                                             sp.csr_matrix((n_aux, n_aux))])).tocsr()
     g_fixed = np.asarray(Pw.T @ (p_y / p_sig), dtype=float)
-    g_fixed[2:] += S.T @ (st_y / st_sig)
+    g_fixed[2:2 + M] += S.T @ (st_y / st_sig)
     if sparse_path:
-        # x = Sel z: psi0, s and the knots' offsets kb out of z = [psi0, s, c, kb]
-        sel = sp.csr_matrix((np.ones(2 + M), (np.arange(2 + M),
-                             np.concatenate(([0, 1], 2 + M + np.arange(M))))), shape=(2 + M, 2 + 2 * M))
+        # x = Sel z: psi0, s, the knots' offsets kb (and the nuisance) out of
+        # z = [psi0, s, c, kb(, nuisance)]
+        n_x = 2 + M + n_aux
+        sel = sp.csr_matrix((np.ones(n_x), (np.arange(n_x), np.concatenate(
+            ([0, 1], 2 + M + np.arange(M + n_aux))))), shape=(n_x, 2 + 2 * M + n_aux))
         G_fixed = sel.T @ N_fixed_sp @ sel
         E = knot_constraints(knots)
+        if n_aux:
+            E = sp.hstack([E, sp.csr_matrix((E.shape[0], n_aux))]).tocsr()
         N_all = np.zeros((0, 0))
         N = N_all
     else:
@@ -433,7 +455,7 @@ def fit_heading(
             break
         used = new_used
     psi0, s = float(x[0]), float(x[1])
-    kb = x[2:]
+    kb = x[2:2 + M]
     # 1-sigma of s: the normal matrix's inverse, scaled by the kept residuals' excess over
     # their assumed sigma and by sqrt(epochs per HEADING_CORR_S) for their correlation
     s_sigma = float("inf")
