@@ -255,12 +255,13 @@ class _SparseSolution:
         return float(self.lu.solve(e)[i] / self.scale[i])  # type: ignore[attr-defined]
 
 
-def _solve_sparse(G: sp.spmatrix, E: sp.csr_matrix, rhs: FloatArray) -> _SparseSolution:
+def _solve_sparse(G: sp.spmatrix, E: sp.csr_matrix, rhs: FloatArray, m: int) -> _SparseSolution:
     """min |Z z - v|^2 + fixed terms subject to E z = 0, through the sparse KKT system.
 
     ``G`` = Z^T Z + fixed terms (z-space), ``rhs`` = Z^T v + fixed terms.  The same solution
     as the dense x-space normal equations, in O(knots) instead of O(knots^3); the z columns
-    are scaled to unit diagonal as in :func:`_solve_normal`.
+    are scaled to unit diagonal as in :func:`_solve_normal`.  ``m``: the knots, z = [psi0, s,
+    c (m), kb (m), nuisance]; x = [psi0, s, kb, nuisance].
     """
     from scipy.sparse.linalg import splu
 
@@ -279,7 +280,6 @@ def _solve_sparse(G: sp.spmatrix, E: sp.csr_matrix, rhs: FloatArray) -> _SparseS
     K = (Dinv @ sp.bmat([[G, E.T], [E, None]]) @ Dinv).tocsc()
     lu = splu(K)
     sol = lu.solve(np.concatenate((rhs, np.zeros(n_c))) / scale) / scale
-    m = (n_z - 2) // 2
     x = np.concatenate((sol[:2], sol[2 + m:n_z]))
     return _SparseSolution(np.asarray(x, dtype=float), lu, scale)
 
@@ -349,11 +349,11 @@ def fit_heading(
     sparse_path = M > DENSE_MAX_KNOTS
     Q = knot_cumulative(knots) if not sparse_path else np.zeros((0, M))
     inv_sig = sp.diags(1.0 / sig)
-    blocks = [sp.csr_matrix(np.column_stack([np.ones(rows.size), i_meas]) / sig[:, None]),
-              -(inv_sig @ pick), -(inv_sig @ part)]
+    columns = [sp.csr_matrix(np.column_stack([np.ones(rows.size), i_meas]) / sig[:, None]),
+               -(inv_sig @ pick), -(inv_sig @ part)]
     if n_aux:
-        blocks.append(sp.csr_matrix((aux / sig)[:, None]))
-    Z = sp.hstack(blocks).tocsr()
+        columns.append(sp.csr_matrix((aux / sig)[:, None]))
+    Z = sp.hstack(columns).tocsr()
     T = np.zeros((2 + 2 * M + n_aux, 2 + M + n_aux) if not sparse_path else (0, 0))
     if not sparse_path:
         T[0, 0] = T[1, 1] = 1.0
@@ -437,7 +437,7 @@ def fit_heading(
         v_used = Z.T @ np.where(used, (d - i_meas) / sig, 0.0)
         if sparse_path:
             Zu = Z[used] if rows.size else Z
-            solution = _solve_sparse(G_fixed + Zu.T @ Zu, E, sel.T @ g_fixed + v_used)
+            solution = _solve_sparse(G_fixed + Zu.T @ Zu, E, sel.T @ g_fixed + v_used, M)
             x = solution.x
         else:
             out = ~used

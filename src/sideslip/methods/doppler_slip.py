@@ -408,11 +408,11 @@ def run_doppler_slip(drive: Drive, vehicle: Vehicle, use_roll: bool = True,
         # the transient slip the steady model leaves out, ~ K l_r r' (I_z r' / (L C_r)): a
         # nuisance column of the heading fit, so a slalom's swing does not set the gyro scale
         r_dot = np.gradient(moving_average(r_est, width), t)[rows] if n > 1 else np.zeros(rows.size)
-        nk = {"nuisance": r_dot, "nuisance_sigma": TRANSIENT_SLIP_PRIOR_S2}
         if use_roll:
             # eqs 17-19 need a gyro offset that cannot close each curve by itself: a stiff fit
             # (offset knots SCAN_KNOT_S apart), so the curves' heading closure carries the roll
-            stiff = fit_heading(t, rate_h, samples, select, offset_rows, still_rows, wz, **nk,
+            stiff = fit_heading(t, rate_h, samples, select, offset_rows, still_rows, wz, r_dot,
+                                TRANSIENT_SLIP_PRIOR_S2,
                                 knot_spacing_s=SCAN_KNOT_S, bias_rw=SCAN_BIAS_RW)
             r_stiff = stiff.gyro_scale * wz - stiff.gyro_bias * stiff.gyro_scale
             rate_c = horizontal_yaw_rate(r_stiff, 0.0, None, pitch)
@@ -427,7 +427,8 @@ def run_doppler_slip(drive: Drive, vehicle: Vehicle, use_roll: bool = True,
             roll_raw = roll_from_lateral(ay_s, r_s, v_h, 0.0, transient)
             rate_h = horizontal_yaw_rate(wz, 0.0, roll, pitch)
             del stiff, r_stiff, rate_c, transient  # memory: per-row arrays of this pass
-        fit = fit_heading(t, rate_h, samples, select, offset_rows, still_rows, wz, **nk)
+        fit = fit_heading(t, rate_h, samples, select, offset_rows, still_rows, wz, r_dot,
+                          TRANSIENT_SLIP_PRIOR_S2)
         r_corr = fit.gyro_scale * wz - fit.gyro_bias * fit.gyro_scale
         r_s = moving_average(r_corr, width)
         gy = r_s * v_h + (G * np.sin(roll) if use_roll else 0.0)
