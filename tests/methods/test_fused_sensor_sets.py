@@ -31,11 +31,11 @@ def test_without_gnss_fused_runs_and_matches_the_best_paper_method(scenario):
     position (not observable), and is within 10 % of the best paper method the same columns
     allow, or better (measured: slalom on mu 0.25 0.018 vs fg_batch 0.087; race_lap 0.086 vs
     0.63; banked_turn 0.007 vs 0.051 and dlc_bank 0.031 vs 0.110 since the roll gyro drives
-    the bank, were 0.41 and 0.12).  Still behind on cr_circle (0.25 vs obs_modified_nocomp
-    0.032: its steady slip rests on a rear stiffness the circle's entry cannot pin without
-    GNSS) and just behind on step_steer (0.019 vs fg_batch 0.016; see
-    benchmarks/results/no_gnss.md); fused's front-axle relation is left off by default (see
-    FusedSettings.front_axle)."""
+    the bank, were 0.41 and 0.12).  Still behind on cr_circle (seeds 0-3: 0.25 vs
+    obs_modified_nocomp 0.081: its steady slip rests on a rear stiffness the circle's entry
+    cannot pin without GNSS); step_steer's seed-0 1.22x is one draw (seeds 0-3: 0.017 vs
+    fg_batch 0.026; benchmarks/results/no_gnss.md); fused's front-axle relation is left off
+    by default (see FusedSettings.front_axle)."""
     drive = _without_gnss(sim_drive(scenario))
     vehicle = load_vehicle(drive.meta["vehicle"])
     assert why_not(all_methods()["fused"], drive, vehicle) is None
