@@ -33,6 +33,26 @@ def test_beta_stats_of_a_constant_offset_and_speed_gate():
     assert m["beta_max_err_deg"] == pytest.approx(0.5)
 
 
+def test_beta_sigma_shares_count_errors_inside_the_methods_own_sigma():
+    """Errors of 0.5 deg against a beta_std of 0.4 deg on the first 1000 gated rows (inside 2
+    sigma, not 1) and 0.6 deg on the rest (inside both); rows below the gate and rows without
+    a sigma are left out; a method without beta_std gets no share."""
+    cols = _straight()
+    cols["ref_vx"][:100] = 1.0  # below the gate: excluded even with a huge error
+    drive = drive_from_columns(cols)
+    n = len(drive)
+    beta = np.full(n, math.radians(0.5))
+    beta[:100] = 1.0
+    std = np.full(n, math.radians(0.6))
+    std[100:1100] = math.radians(0.4)
+    std[-1] = np.nan  # no sigma on this row: not counted
+    m = metrics(drive, {"beta": beta, "beta_std": std})
+    gated = n - 100 - 1
+    assert m["beta_within_1sigma"] == pytest.approx((gated - 1000) / gated)
+    assert m["beta_within_2sigma"] == pytest.approx(1.0)
+    assert "beta_within_2sigma" not in metrics(drive, {"beta": beta})
+
+
 def test_yaw_error_is_wrapped():
     drive = drive_from_columns(_straight())
     yaw = np.full(len(drive), 2 * math.pi + math.radians(1.0))

@@ -8,6 +8,10 @@ The 100 m cross-track metric follows seed 000 (Takikawa et al. 2021, Sec. "Evalu
 dead-reckoned segment starts every 10 m of reference path, is aligned to the reference at its
 start (position and heading), and its error after 100 m of reference path is measured
 orthogonally to the reference path.
+
+Beyond the contract's names, a method that reports its own 1-sigma (``beta_std``) gets
+``beta_within_1sigma`` and ``beta_within_2sigma``: the shares of the gated rows whose error
+lies inside one and two of those sigmas (a calibrated Gaussian: 0.683 and 0.954).
 """
 
 from __future__ import annotations
@@ -74,6 +78,23 @@ def angle_errors(drive: Drive, estimate: FloatArray, ref_column: str, gate: floa
         return np.zeros(0)
     ok = np.isfinite(ref) & np.isfinite(estimate) & (forward_speed(drive) > gate)
     return wrap_angle(estimate[ok] - ref[ok])
+
+
+def sigma_shares(
+    drive: Drive, estimate: FloatArray, std: FloatArray, ref_column: str, gate: float = SPEED_GATE
+) -> tuple[float, float, int] | None:
+    """Shares of the gated rows (finite reference, finite positive ``std``) whose wrapped error
+    ``|estimate - reference|`` is inside 1 and 2 ``std`` (same unit, rad for angles), and the
+    number of those rows; None where there are none."""
+    ref = drive.get(ref_column)
+    if ref is None:
+        return None
+    ok = np.isfinite(ref) & np.isfinite(estimate) & np.isfinite(std) & (std > 0)
+    ok &= forward_speed(drive) > gate
+    if not ok.any():
+        return None
+    z = np.abs(wrap_angle(estimate[ok] - ref[ok])) / std[ok]
+    return float(np.mean(z < 1.0)), float(np.mean(z < 2.0)), int(ok.sum())
 
 
 def _path_tangent(e: FloatArray, n: FloatArray) -> tuple[FloatArray, FloatArray]:
@@ -163,6 +184,11 @@ def metrics(
     out: dict[str, float] = {}
     if "beta" in series:
         out.update(_stats(angle_errors(drive, series["beta"], "ref_beta", gate), "beta"))
+        shares = None
+        if "beta_std" in series:
+            shares = sigma_shares(drive, series["beta"], series["beta_std"], "ref_beta", gate)
+        if shares is not None:
+            out["beta_within_1sigma"], out["beta_within_2sigma"] = shares[:2]
     if "roll" in series:
         stats = _stats(angle_errors(drive, series["roll"], "ref_roll", gate), "roll")
         stats.pop("roll_max_err_deg", None)

@@ -12,7 +12,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sideslip.drive import Drive
-from sideslip.evaluate import SPEED_GATE, forward_speed
+from sideslip.evaluate import SPEED_GATE, forward_speed, sigma_shares
 from sideslip.frames import wrap_angle
 
 FloatArray = NDArray[np.float64]
@@ -156,16 +156,13 @@ def calibration(drive: Drive, est: Series, key: str = "beta", ref: str = "ref_be
     out: list[Calibration] = []
     if ref not in drive:
         return out
-    gate = forward_speed(drive) > SPEED_GATE
     for m, series in est.items():
         std = series.get(f"{key}_std") if m else None
         if std is None or key not in series:
             continue
-        ok = gate & np.isfinite(drive[ref]) & np.isfinite(std) & (std > 0)
-        if not ok.any():
-            continue
-        z = np.abs(wrap_angle(series[key][ok] - drive[ref][ok])) / std[ok]
-        out.append(Calibration(m, float(np.mean(z < 1)), float(np.mean(z < 2)), int(ok.sum())))
+        shares = sigma_shares(drive, series[key], std, ref)
+        if shares is not None:
+            out.append(Calibration(m, *shares))
     return out
 
 
