@@ -48,14 +48,14 @@ def test_without_gnss_fused_runs_and_matches_the_best_paper_method(scenario):
     assert rmse["fused"] <= 1.1 * others[best], (rmse["fused"], best, others[best])
 
 
-def _positions_only(scenario: str = "dlc_bank") -> Drive:
-    """A 20 Hz receiver without Doppler, 50 ms late, its antenna 0.5 m ahead of where the vehicle
-    file says (default: on the double lane change with bank)."""
+def _positions_only(scenario: str = "dlc_bank", lever_x_m: float = 0.5) -> Drive:
+    """A 20 Hz receiver without Doppler, 50 ms late, its antenna ``lever_x_m`` ahead of where the
+    vehicle file says (default: 0.5 m, on the double lane change with bank)."""
     cfg = (
         SensorConfig()
         .with_overrides(SCENARIOS[scenario].sensor_overrides)
         .with_overrides(
-            {"gnss_rate_hz": 20.0, "gnss_doppler": False, "gnss_latency_s": 0.05, "gnss_lever_offset_x": 0.5}
+            {"gnss_rate_hz": 20.0, "gnss_doppler": False, "gnss_latency_s": 0.05, "gnss_lever_offset_x": lever_x_m}
         )
     )
     return simulate(scenario, seed=0, config=cfg)
@@ -91,22 +91,26 @@ def test_positions_only_gnss_fused_within_10_percent_of_the_best_method():
     assert rmse["fused"] <= 1.1 * others[best], (rmse["fused"], best, others[best])
 
 
+@pytest.mark.parametrize("lever_x_m", [0.5, -0.5])
 @pytest.mark.parametrize("soft", [False, True])
-def test_positions_only_on_a_banked_track_the_arc_does_not_teach_a_wrong_stiffness(soft):
-    """The steady 8 deg banked arc with fixes only (20 Hz, 50 ms late, antenna 0.5 m off): on an
-    arc a course error draws the same track as an along-track offset of the fixes, so a
-    stiffness learned there took that offset for slip (rear scale 0.36 +- 0.01 with the right
-    file, beta RMSE 0.93 deg, 52 % inside 2 sigma; 1.02 deg with the 30 %-soft file).  With
-    the tyres carrying the slip in arcs: measured 0.024 / 0.045 deg, 100 % inside 2 sigma.
-    Bounds 0.06 / 0.10 deg: the soft file's 30 % error in a 0.34 deg slip is 0.1 deg where
-    no transient teaches the stiffness; 2-sigma share 0.90 (issue 15's floor)."""
-    drive = _positions_only("banked_track_turn")
+def test_positions_only_on_a_banked_track_the_arc_does_not_teach_a_wrong_stiffness(soft, lever_x_m):
+    """The steady 8 deg banked arc with fixes only (20 Hz, 50 ms late, antenna 0.5 m ahead of or
+    behind where the file says): on an arc a course error draws the same track as an
+    along-track offset of the fixes, so a stiffness learned there took that offset for slip
+    (rear scale 0.36 +- 0.01 with the right file, beta RMSE 0.93 deg, 52 % inside 2 sigma;
+    1.02 deg with the 30 %-soft file).  With the tyres carrying the slip in arcs and the
+    offset one draw per 20 s of fixes: measured 0.027 / 0.065 deg (right file, antenna ahead /
+    behind), 0.186 / 0.239 (soft), 100 % inside 2 sigma.  The same drive without GNSS scores
+    0.052 (right) and 0.241 (soft): in an arc the fixes cannot tell the slip from the antenna's
+    offset, so the bounds are that tyres-only figure rounded up, 0.08 / 0.26 deg (a fifth of
+    the failure's); 2-sigma share 0.90 (issue 15's floor)."""
+    drive = _positions_only("banked_track_turn", lever_x_m)
     vehicle = load_vehicle(drive.meta["vehicle"])
     if soft:
         vehicle = vehicle.with_changes(cf=0.7 * vehicle.cf, cr=0.7 * vehicle.cr)
     est = run_method("fused", drive, vehicle)
     rmse = metrics(drive, est.series)["beta_rmse_deg"]
-    assert rmse <= (0.10 if soft else 0.06), rmse
+    assert rmse <= (0.26 if soft else 0.08), rmse
     assert two_sigma_share(drive, est) >= 0.90
     filt = run_method("fused_filter", drive, vehicle)  # was 1.99 deg, 56 % inside 2 sigma
     assert metrics(drive, filt.series)["beta_rmse_deg"] <= 0.35 and two_sigma_share(drive, filt) >= 0.90
@@ -190,7 +194,9 @@ def test_positions_only_latency_is_used_where_speed_changes_reveal_it() -> None:
     """urban_course, 20 Hz fixes 0.15 s late (antenna where the file says): without the
     latency the fixes' along-track offset in every turn reads as slip (measured beta RMSE 0.42
     deg; 0.28 since that offset counts as correlated over a second of fixes); with the latency
-    identified from the fixes' speed, 0.032.  Bounds: 0.1 deg, and without it at least 3x."""
+    identified from the fixes' speed, 0.032.  Since the offset counts once per 20 s of fixes
+    (FusedSettings.gnss_offset_span_s) the unidentified latency costs less: 0.063 without it,
+    0.030 with it.  Bounds: 0.1 deg, and without it at least 1.6x (measured 2.1x)."""
     from tests.test_gnss_latency import positions_drive
 
     drive = positions_drive("urban_course", 0.15)
@@ -200,7 +206,7 @@ def test_positions_only_latency_is_used_where_speed_changes_reveal_it() -> None:
     assert est.params["gnss_latency_s"] == pytest.approx(0.15, abs=0.05)
     off = run_method("fused", drive, vehicle, settings={"identify_gnss_latency": False})
     on_rmse = metrics(drive, est.series)["beta_rmse_deg"]
-    assert metrics(drive, off.series)["beta_rmse_deg"] > 3.0 * on_rmse
+    assert metrics(drive, off.series)["beta_rmse_deg"] > 1.6 * on_rmse
 
 
 def test_positions_only_the_lateral_lever_arm_is_identified_and_used() -> None:
@@ -256,11 +262,27 @@ def test_positions_only_an_unknown_latency_is_one_offset_not_white_noise() -> No
     track by one offset for many fixes.  Counted as white at every fix, the hundreds of fixes in
     a turn pinned that offset to centimetres and bent the slip to explain it (beta RMSE 0.166
     deg); counted once per second of fixes along the track, 0.094 (suite mean 0.090 -> 0.078,
-    30 % soft file 0.121 -> 0.120).  Bounds: 0.13 deg, and 2 sigma share at least 0.9."""
+    30 % soft file 0.121 -> 0.120); once per 20 s of fixes (FusedSettings.gnss_offset_span_s),
+    0.088.  Bounds: 0.13 deg, and 2 sigma share at least 0.9."""
     drive = _positions_only("race_lap")
     vehicle = load_vehicle(drive.meta["vehicle"])
     est = run_method("fused", drive, vehicle)
     assert metrics(drive, est.series)["beta_rmse_deg"] < 0.13
+    assert two_sigma_share(drive, est) >= 0.9
+
+
+def test_positions_only_an_antenna_behind_the_file_is_not_taken_for_slip() -> None:
+    """two_turns_gyro_sf (0.2 rad/s turns at about 10 m/s) with the fixes 50 ms late and the
+    antenna 0.5 m behind where the file says: in a steady arc the latency reads as a slip of
+    -tau r (-0.57 deg) and the antenna as -l_x r / v (-0.29 deg), the same sign, so nothing
+    cancels.  With the offset counted once per second of fixes the smoother bent beta by most
+    of it: 0.304 deg RMSE (2026-12-05 default); once per 20 s of fixes, 0.135 (without GNSS
+    0.041: the tyres alone).  Bound 0.2 deg: under a quarter of the 0.86 deg offset in the arcs,
+    and clear of the 1 s figure; 2 sigma share at least 0.9 (issue 15's floor)."""
+    drive = _positions_only("two_turns_gyro_sf", -0.5)
+    vehicle = load_vehicle(drive.meta["vehicle"])
+    est = run_method("fused", drive, vehicle)
+    assert metrics(drive, est.series)["beta_rmse_deg"] < 0.2
     assert two_sigma_share(drive, est) >= 0.9
 
 

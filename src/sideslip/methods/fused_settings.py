@@ -236,8 +236,18 @@ class FusedSettings:
     doppler_latency_prior_sigma_s: float = 0.05
     # positions only: how long one unidentified latency / lever-arm offset of the fixes lasts
     # for the noise model (its variance times the fixes in this span, at least one: a span
-    # shorter than the fix interval counts it as white)
-    gnss_offset_span_s: float = 1.0
+    # shorter than the fix interval counts it as white).  The offset is the receiver's and the
+    # antenna's, the same for the whole drive; 20 s lets a turn's fixes carry it once.
+    # Measured (benchmarks/results/positions_offset_span.md: 20 Hz fixes 50 ms late with the
+    # antenna 0.5 m ahead / behind / at the file, or 150 ms late; 16 scenarios; mean over the
+    # four receivers of the mean beta RMSE, deg): 1 s -> 20 s right file 0.099 -> 0.079,
+    # 30 %-soft 0.168 -> 0.152, rough 0.164 -> 0.143; worst receiver 0.136 -> 0.087 (right),
+    # 0.227 -> 0.168 (soft), 0.220 -> 0.158 (rough).  Where the antenna ahead cancels the
+    # lateness (issue 15's receiver) the fixes are nearly unbiased and a wrong file loses
+    # their pull: soft 0.120 -> 0.139, rough 0.119 -> 0.130.  Longer spans approach the
+    # tyres alone (40 s: 0.077 / 0.151 / 0.140; 100-400 s flat), where the fixes correct
+    # only a gross tyre error
+    gnss_offset_span_s: float = 20.0
     health_window_s: float = 2.0  # s: window of the consistency test
     # the axle curve of the tyre relations (models.axle_force): 0, the brush (Fiala) curve; a
     # value > 1, the simplified Magic Formula with that shape factor (1.3: Pacejka's typical
