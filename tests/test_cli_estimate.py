@@ -71,6 +71,26 @@ def test_bad_heading_convention_is_named():
     assert "--heading-convention: 'north': expected one of enu-ccw-rad, north-cw-deg" in res.stderr
 
 
+def test_a_drive_without_the_yaw_rate_gyro_is_one_line_and_writes_nothing(tmp_path):
+    """The contract's drive table requires wz for all methods: without it the default run is
+    bad input (exit 2, one line naming file and column); seed 005's gyro-free EKF still runs
+    when named."""
+    frame = pd.read_csv(CIRCLE).drop(columns=["wz"])
+    drive = tmp_path / "no_gyro.csv"
+    frame.to_csv(drive, index=False)
+    out = tmp_path / "e.parquet"
+    res = invoke("estimate", drive, "--vehicle", "midsize_sedan", "--out", out)
+    assert res.exit_code == 2
+    assert res.stderr.strip() == (
+        f"error: {drive}: column 'wz': required column is missing or empty: expected the yaw-rate "
+        "gyro in rad/s (every method but ekf_wss_sas needs it; --method ekf_wss_sas runs that one alone)"
+    )
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["no_gyro.csv"]
+    named = invoke("estimate", drive, "--vehicle", "midsize_sedan", "--method", "ekf_wss_sas", "--out", out)
+    assert named.exit_code == 0, named.output
+    assert "ekf_wss_sas.beta" in pd.read_parquet(out).columns
+
+
 def test_skipped_methods_and_their_reasons_go_to_the_params(tmp_path):
     frame = pd.read_csv(CIRCLE).drop(columns=["steer"])
     drive = tmp_path / "nosteer.csv"
