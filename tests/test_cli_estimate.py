@@ -91,6 +91,23 @@ def test_a_drive_without_the_yaw_rate_gyro_is_one_line_and_writes_nothing(tmp_pa
     assert "ekf_wss_sas.beta" in pd.read_parquet(out).columns
 
 
+def test_a_drive_no_method_can_run_on_names_the_column_most_methods_lack(tmp_path):
+    """Without any speed column (wheels or CAN) nothing runs: the one error line names the
+    speed columns, which most methods list as missing, and nothing is written."""
+    frame = pd.read_csv(CIRCLE)
+    frame = frame.drop(columns=[c for c in frame.columns if c.startswith("v_")])
+    drive = tmp_path / "no_speed.csv"
+    frame.to_csv(drive, index=False)
+    res = invoke("estimate", drive, "--vehicle", "midsize_sedan", "--out", tmp_path / "e.parquet")
+    assert res.exit_code == 2
+    last = res.stderr.strip().splitlines()[-1]
+    assert last == (
+        f"error: {drive}: column 'v_fl or v_fr or v_rl or v_rr or v_can': no method can run on this "
+        "drive: most lack this column, missing or empty (the skipped reasons above say what each needs)"
+    )
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["no_speed.csv"]
+
+
 def test_skipped_methods_and_their_reasons_go_to_the_params(tmp_path):
     frame = pd.read_csv(CIRCLE).drop(columns=["steer"])
     drive = tmp_path / "nosteer.csv"

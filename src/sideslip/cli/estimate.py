@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -79,8 +80,32 @@ def run_estimates(
         nums = [(k, v) for k, v in est.params.items() if type(v) in (int, float)]
         detail(f"{est.method}: " + (", ".join(f"{k}={v:.4g}" for k, v in nums) or "no scalar params"))
     if not len(result):
+        missing = _missing_most(result.skipped)
+        if missing is not None:
+            raise InputError(
+                drive.path,
+                "no method can run on this drive: most lack this column, missing or empty "
+                "(the skipped reasons above say what each needs)",
+                column=missing,
+            )
         raise InputError(drive.path, "no method can run on this drive (see the skipped reasons above)")
     return result
+
+
+def _missing_most(skipped: Mapping[str, str]) -> str | None:
+    """The drive column the most skipped methods name as missing (``"drive lacks 'a', 'b'"``;
+    ties: the first in sorted order), or None where none lacks a drive column."""
+    import re
+    from collections import Counter
+
+    counts: Counter[str] = Counter()
+    for reason in skipped.values():
+        if reason.startswith("drive lacks"):
+            counts.update(set(re.findall(r"'([^']+)'", reason)))
+    if not counts:
+        return None
+    top = max(counts.values())
+    return sorted(c for c, k in counts.items() if k == top)[0]
 
 
 def _has_yaw_rate(drive: Any) -> bool:
