@@ -130,6 +130,8 @@ from sideslip.methods.fused_settings import (
     force_noise_variance,
     force_time_constant,
 )
+from sideslip.methods.fused_stiffness import PRIOR_SHIFT as STIFFNESS_PRIOR_SHIFT
+from sideslip.methods.fused_stiffness import model_form_params, prior_share, rear_secant
 from sideslip.methods.fused_vrw import NoiseChoice, search_accel_vrw, search_noise_scale
 from sideslip.methods.registry import SPEED, register
 from sideslip.methods.roll_gyro_gradient import identify_roll_gradient_from_gyro
@@ -713,6 +715,17 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
         if lever_check.applied:
             lever[0] += lever_check.dl_x_m
     xs, var, var_last, cov_vxvy, nis, counts = eng.run_nodes(*before, g_age, *after)
+    prior_check = None  # (share of a moved prior the rear scale keeps, the prior's sigma)
+    if tyres_carry and nz.stiffness_prior_check:
+        # without Doppler the drive may not inform the rear stiffness at all: run once more
+        # with its prior mean moved (sideslip.methods.fused_stiffness)
+        x0_moved = x0.copy()
+        x0_moved[ISR] += STIFFNESS_PRIOR_SHIFT
+        xs_moved = eng.run_nodes(*before, g_age, *after[:6], x0_moved, *after[7:])[0]
+        pick = np.median if smooth else (lambda a: a[-1])
+        held = [float(pick(np.clip(a[:, ISR], SCALE_MIN, SCALE_MAX))) for a in (xs, xs_moved)]
+        prior_check = (prior_share(*held), nz.stiffness_prior_sigma)
+        del xs_moved
     latency_beta = None  # |d beta| at the nodes for a latency one sigma later (positions only)
     if has_pos and not has_vel and not calibrate:
         # an unknown latency turns the fixes' course by r tau through a turn: an error
@@ -793,6 +806,19 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     )  # fmt: skip
     params = dict(est.params)
     series = dict(est.series)
+    # the learned rear stiffness against a straight line through the estimate's own slip:
+    # the difference is the tyre curve's part of its sigma (sideslip.methods.fused_stiffness)
+    secant = rear_secant(
+        t, series["beta"], series["r"], series["vx"], fy_lp, (geom[0], geom[1], iz_m, geom[3]),
+        nz.stiffness_curve_accel,
+    )  # fmt: skip
+    sigma_formal = params["rear_stiffness_scale_sigma"]
+    params.update(model_form_params(params["rear_stiffness_scale"], sigma_formal, secant, prior_check))
+    if not use_front:
+        params["front_stiffness_scale_note"] = (
+            "not identified: the front-axle relation is off (FusedSettings.front_axle, or no "
+            "steering column); the scale and its sigma are the prior's"
+        )
     if latency_beta is not None:
         # the latency's part of beta_std (above), on the rows as the nodes are
         lat_rows = eng.interp_rows(j, w, latency_beta[None, :])[0] if smooth else latency_beta[j]

@@ -50,6 +50,10 @@ class FusedSettings:
     gyro_scale_psd: float = 1e-5  # 1/sqrt(s)
     stiffness_prior_sigma: float = 0.5  # relative: users' files are 20-35 % off, compliance
     stiffness_psd: float = 2e-3  # 1/sqrt(s): tyre temperature, wear, load
+    # without GNSS Doppler, run once more with the rear stiffness's prior mean moved, and take
+    # the sigma the share it keeps implies where larger than the smoother's (fused_stiffness;
+    # one more pass of the estimator on such drives)
+    stiffness_prior_check: bool = True
     mu_prior: float = 1.0  # dry asphalt
     mu_prior_sigma: float = 0.35
     mu_psd: float = 0.02  # 1/sqrt(s): patches of another surface
