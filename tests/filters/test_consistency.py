@@ -43,3 +43,30 @@ def test_rows_without_innovations_are_neutral_and_causal_window_looks_back_only(
     assert np.all(c.mean_nis[t < 10] == 1.0) and not c.flagged[t < 10].any()
     assert c.flagged[t > 10.05].all()
     assert np.isfinite(c.inflation).all() and np.isfinite(c.health).all()
+
+
+def test_a_slow_channel_misfit_hidden_in_the_pooled_mean_shows_in_its_own_test():
+    """A 100 Hz channel whose NIS sits at 0.25 (its S four times too wide) and a 1 Hz one 3
+    sigma off from t = 100 s: pooled, the window's mean NIS stays near 0.3 and nothing is
+    flagged; the slow channel's own test flags its misfit, and ``worst`` keeps that flag and
+    inflation while the first half stays unflagged."""
+    from sideslip.filters.nis_windows import binned_nis_consistency
+
+    rng = np.random.default_rng(3)
+    t = np.round(np.arange(0.0, 200.0, 0.01), 2)
+    fast = 0.25 * rng.standard_normal(t.size) ** 2
+    slow = np.full(t.size, np.nan)
+    every_s = np.flatnonzero(np.isclose(t % 1.0, 0.0))
+    scale = np.where(t[every_s] > 100.0, 3.0, 1.0)
+    slow[every_s] = (scale * rng.standard_normal(every_s.size)) ** 2
+    both = fast + np.nan_to_num(slow)
+    dof = 1.0 + np.isfinite(slow)
+    pooled = binned_nis_consistency(t, both, dof, 4.0)
+    assert pooled.flagged.mean() < 0.01
+    own = binned_nis_consistency(t, slow, np.isfinite(slow).astype(float), 4.0)
+    merged = pooled.worst(own)
+    late = t > 104.0
+    assert merged.flagged[late].mean() > 0.5
+    assert np.median(merged.inflation[late & merged.flagged]) > 3.0
+    assert merged.flagged[t < 96.0].mean() < 0.05
+    assert np.all(merged.inflation >= pooled.inflation)

@@ -44,6 +44,19 @@ class Consistency:
     flagged: NDArray[np.bool_]
     bound: FloatArray
 
+    def worst(self, other: Consistency) -> Consistency:
+        """Row by row the worse of two tests of the same rows (another channel's own test):
+        flagged where either is, the larger inflation and health, the larger mean NIS with
+        its bound."""
+        mine = self.mean_nis / self.bound >= other.mean_nis / other.bound
+        return Consistency(
+            np.where(mine, self.mean_nis, other.mean_nis),
+            np.maximum(self.inflation, other.inflation),
+            np.maximum(self.health, other.health),
+            self.flagged | other.flagged,
+            np.where(mine, self.bound, other.bound),
+        )
+
     def summary(self, t: FloatArray) -> dict[str, object]:
         """Params entry: share of flagged rows and the flagged spans (start, end in s)."""
         spans: list[list[float]] = []
