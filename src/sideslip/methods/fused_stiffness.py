@@ -30,7 +30,10 @@ the file, not the tyres).  The estimator is run once more with the scale's prior
 ``PRIOR_SHIFT``; the share of the shift the estimate keeps is, for a linear-Gaussian
 posterior, ``sigma_post^2 / sigma_prior^2`` (the posterior mean's derivative by the prior
 mean), so ``sigma_prior sqrt(share)`` is the sigma the drive's information actually gives, and
-it replaces the formal sigma where it is larger.
+it replaces the formal sigma where it is larger.  Reported:
+``rear_stiffness_scale_sigma = hypot(max(sigma_formal, sigma_prior sqrt(share)), |s_r - s_sec|)``
+(``fused_filter``: its last node's scale and sigma, the secant over its own causal slip).
+Measured by ``benchmarks/stiffness_sigma.py``.
 
 The rear slip angle is ``atan(l_r r / v_x - tan(beta))`` (CG sideslip moved to the rear
 axle) and the force ``(l_f f_y - (I_z / m) r') / L`` (the single track's force and moment
