@@ -456,6 +456,8 @@ def test_an_antenna_the_file_misplaces_does_not_make_fused_confidently_wrong() -
     # the params report the scale the relation used, and say that it was held
     assert est.params["rear_stiffness_scale"] == pytest.approx(2.0)
     assert "held at 2 x the file's" in est.params["rear_stiffness_scale_note"]
+    # held at a bound, the scale is no estimate: its sigma is at least the prior's 0.5
+    assert est.params["rear_stiffness_scale_sigma"] >= 0.5
 
 
 def test_an_antenna_the_file_misplaces_is_identified_with_doppler_where_asked() -> None:

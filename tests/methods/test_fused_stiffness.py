@@ -138,3 +138,9 @@ def test_with_doppler_the_prior_check_does_not_run():
     drive = sim_drive("urban_course")
     p = fuse(drive, load_vehicle(drive.meta["vehicle"]), smooth=True).params
     assert "rear_stiffness_scale_prior_share" not in p
+
+
+def test_a_scale_held_at_its_bound_has_at_least_the_priors_sigma():
+    """Held at a bound (the relation asked for beyond it) the scale is no estimate."""
+    params = model_form_params(0.5, 0.12, RearSecant(scale=0.48, seconds=2.1), (0.0, 0.5), 0.5)
+    assert params["rear_stiffness_scale_sigma"] == pytest.approx(math.hypot(0.5, 0.02))

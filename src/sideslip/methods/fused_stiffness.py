@@ -30,7 +30,9 @@ the file, not the tyres).  The estimator is run once more with the scale's prior
 ``PRIOR_SHIFT``; the share of the shift the estimate keeps is, for a linear-Gaussian
 posterior, ``sigma_post^2 / sigma_prior^2`` (the posterior mean's derivative by the prior
 mean), so ``sigma_prior sqrt(share)`` is the sigma the drive's information actually gives, and
-it replaces the formal sigma where it is larger.  Reported:
+it replaces the formal sigma where it is larger.  A scale held at a bound of its range
+(``SCALE_MIN`` / ``SCALE_MAX`` of :mod:`sideslip.models.fused_measurements`: the relation
+asked for beyond it) is no estimate, and its sigma is at least the prior's.  Reported:
 ``rear_stiffness_scale_sigma = hypot(max(sigma_formal, sigma_prior sqrt(share)), |s_r - s_sec|)``
 (``fused_filter``: its last node's scale and sigma, the secant over its own causal slip).
 Measured by ``benchmarks/stiffness_sigma.py``.
@@ -109,16 +111,21 @@ def model_form_params(
     sigma_formal: float,
     secant: RearSecant | None,
     prior: tuple[float, float] | None = None,
+    held_sigma: float | None = None,
 ) -> dict[str, Any]:
     """The params ``fused`` reports for its rear stiffness beyond the scale itself: the
     formal sigma, the secant, the prior check's share (``prior = (share, prior sigma)``, None
-    where it did not run) and the sigma with both terms (module docstring)."""
+    where it did not run) and the sigma with both terms (module docstring).  ``held_sigma``:
+    the scale is held at a bound of its range (the relation asked for more or less), so it is
+    no estimate, and its sigma is at least this (the prior's)."""
     out: dict[str, Any] = {"rear_stiffness_scale_sigma_formal": sigma_formal}
     sigma = sigma_formal
     if prior is not None:
         share, prior_sigma = prior
         out["rear_stiffness_scale_prior_share"] = share
         sigma = max(sigma, prior_sigma * math.sqrt(share))
+    if held_sigma is not None:
+        sigma = max(sigma, held_sigma)
     if secant is None or not math.isfinite(secant.scale):
         out["rear_stiffness_scale_sigma"] = sigma
         out["rear_stiffness_scale_secant"] = None
