@@ -813,8 +813,9 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
         nz.stiffness_curve_accel,
     )  # fmt: skip
     sigma_formal = params["rear_stiffness_scale_sigma"]
-    held = nz.stiffness_prior_sigma if "rear_stiffness_scale_note" in params else None
-    params.update(model_form_params(params["rear_stiffness_scale"], sigma_formal, secant, prior_check, held))
+    held_sigma = nz.stiffness_prior_sigma if "rear_stiffness_scale_note" in params else None
+    scale = params["rear_stiffness_scale"]
+    params.update(model_form_params(scale, sigma_formal, secant, prior_check, held_sigma))
     if not use_front:
         params["front_stiffness_scale_note"] = (
             "not identified: the front-axle relation is off (FusedSettings.front_axle, or no "
