@@ -26,6 +26,7 @@ import math
 import sys
 import time
 from collections.abc import Mapping
+from dataclasses import fields
 from pathlib import Path
 from typing import Any
 
@@ -276,6 +277,21 @@ def main(segment: Path = SEGMENT) -> str:
         raw = results.get(name, {})
         lines.append(f"| {name} | {_fmt(raw.get('yaw_rmse_deg'))} -> {_fmt(r.get('yaw_rmse_deg'))}"
                      f" | {_fmt(raw.get('beta_rmse_deg'))} -> {_fmt(r.get('beta_rmse_deg'))} |")
+    lines += ["", "## The drive's own gyro zero on the raw gyro (`zero_gyro`)", "",
+              "The methods with a `zero_gyro` setting (their papers assume a zeroed gyro, or their "
+              "bias state starts from it) on the raw gyro, with the setting off (the samples as "
+              "recorded, the bias state from 0) and on (the default: the bias of the drive's GNSS "
+              "course windows and standstill, `sideslip.calibrate.sensors.drive_gyro_bias`).", "",
+              "| method | yaw RMSE deg (off -> on) | beta RMSE deg (off -> on) |", "|---|---|---|"]
+    for name, method in all_methods().items():
+        if method.settings is None or "zero_gyro" not in {f.name for f in fields(method.settings)}:
+            continue
+        if why_not(method, drive, vehicle):
+            continue
+        off = figures(drive, run_method(method, drive, vehicle, {"zero_gyro": False}), facts)
+        on = results.get(name, {})
+        lines.append(f"| {name} | {_fmt(off.get('yaw_rmse_deg'))} -> {_fmt(on.get('yaw_rmse_deg'))}"
+                     f" | {_fmt(off.get('beta_rmse_deg'))} -> {_fmt(on.get('beta_rmse_deg'))} |")
     lines.append("")
     text = "\n".join(lines)
     RESULT.parent.mkdir(parents=True, exist_ok=True)

@@ -49,19 +49,13 @@ from benchmarks import realdata_check as rc  # noqa: E402
 # Known failures on this minute, found by this check: (method, check) -> why.  Each is asserted
 # to fail, so the test says when one is fixed (then remove it here).
 KNOWN_FAILURES = {
-    ("kkf", "heading"): "the causal KKF starts from a 1 deg/s bias prior and needs about 10 s of "
-    "straight driving to learn this raw gyro's 3.9 deg/s bias (it then matches Android's to "
-    "0.03 deg/s and holds the heading within 0.3 deg); the transient makes the minute's heading "
-    "RMSE 3.8 deg, above the 1 deg bound",
-    ("kkf", "sideslip"): "beta = course - psi carries the same 3.8 deg heading transient",
     ("kinematic_integration", "sideslip"): "open-loop integration of a_y / V - r with the raw "
-    "phone gyro (3.9 deg/s bias, no standstill to learn it): 76 deg after a minute",
-    ("obs_kinematic", "sideslip"): "the kinematic observer integrates the raw gyro's 3.9 deg/s "
-    "bias (no standstill on this minute to learn it): 25 deg",
-    ("obs_kinematic", "roll"): "roll 7.5 deg RMSE against the pose",
-    ("obs_modified", "roll"): "roll 7.5 deg RMSE against the pose",
-    ("roll_index", "roll"): "roll 7.5 deg RMSE against the pose",
+    "phone gyro: 76 deg after a minute (the method has no zero; its point is the drift)",
 }
+# Fixed by the drive's own gyro zero (calibrate.sensors.drive_gyro_bias, 2026-12-06): kkf
+# heading 3.8 -> 0.12 deg and sideslip 3.75 -> 0.34 (its bias state started at 0 +- 1 deg/s and
+# took 10 s to learn the raw gyro's 3.9 deg/s); obs_kinematic sideslip 24.9 -> 0.19 deg; the
+# roll of obs_kinematic, obs_modified and roll_index (7.5 deg RMSE from the unzeroed gyro).
 OUTAGE_DISTANCE_FRACTION = 0.05
 # Sideslip on this minute (DATA_NOTES): |ref_beta| <= 0.32 deg after the mount yaw is removed,
 # |yaw rate| <= 1.5 deg/s at 8-20 m/s, so |a_y| <= 0.5 m/s^2 and a linear single-track model

@@ -16,6 +16,7 @@ import pytest
 
 from sideslip.drive import Drive, drive_from_columns
 from sideslip.errors import InputError
+from sideslip.evaluate import metrics
 from sideslip.methods.factor_graph import (
     FactorGraphSettings,
     fg_batch,
@@ -26,6 +27,8 @@ from sideslip.methods.factor_graph import (
 from sideslip.methods.registry import all_methods, run_method
 from sideslip.models.single_track import continuous, discretise
 from sideslip.vehicle import load_vehicle
+from tests.conftest import sim_drive
+from tests.helpers import raw_gyro
 
 VEHICLE = load_vehicle("ferrari_250lm")
 METHODS = (fg_batch, fg_lag, kf_linear)
@@ -582,3 +585,20 @@ def test_auto_sigmas_on_a_real_car_with_a_biased_phone_gyro():
             for p, s in (("auto", {}), ("physics", {"preset": "physics"}), ("paper", {"preset": "paper"}))}
     assert rmse["auto"] <= 1.15 * min(rmse["physics"], rmse["paper"]), rmse
     assert rmse["auto"] < 0.2, rmse
+
+
+@pytest.mark.parametrize("method", ["kf_linear", "fg_lag"])
+def test_factor_graph_subtracts_the_drive_zero(method: str) -> None:
+    """demo with a 3 deg/s raw bias: with the zero the graph's beta is as on the drive's own gyro
+    (0.005 deg bound: the two zeros differ by the fit's noise); with ``zero_gyro=False`` the
+    yaw-rate factors read the bias as yaw and beta is off (kf_linear 0.069 -> 0.163 deg)."""
+    drive = sim_drive("demo")
+    vehicle = load_vehicle(drive.meta["vehicle"])
+    meth = all_methods()[method]
+    base = metrics(drive, run_method(meth, drive, vehicle).series)["beta_rmse_deg"]
+    raw = raw_gyro(drive)
+    zeroed = metrics(drive, run_method(meth, raw, vehicle).series)["beta_rmse_deg"]
+    as_recorded = run_method(meth, raw, vehicle, FactorGraphSettings(zero_gyro=False))
+    assert zeroed == pytest.approx(base, abs=0.005)
+    assert metrics(drive, as_recorded.series)["beta_rmse_deg"] > base + 0.05
+    assert "gyro_zero" in as_recorded.params and "off" in str(as_recorded.params["gyro_zero"])

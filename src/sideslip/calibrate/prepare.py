@@ -174,6 +174,61 @@ def _gnss(drive: Drive, wz: FloatArray, wx: FloatArray | None, lever: tuple[floa
     return rows, out, speed, rate, acc, ay, dt_g, valid, run, np.nan_to_num(grade)
 
 
+@dataclass(frozen=True)
+class GyroSignals:
+    """What the gyro-bias relation needs (:func:`sideslip.calibrate.sensors.gyro_bias_scale`),
+    prepared alone: ``yaw_int`` the integral of the raw (interpolated) ``wz`` (rad, no tilt
+    correction: that is a scale, not a bias), ``standstill`` rows, and the GNSS course grid of
+    :class:`Signals` (``g_rows``, ``g_course``, ``g_run``, ``g_dt``, ``g_valid``)."""
+
+    t: FloatArray
+    yaw_int: FloatArray
+    standstill: BoolArray
+    g_rows: IntArray
+    g_course: FloatArray
+    g_run: IntArray
+    g_dt: float
+    g_valid: BoolArray
+
+    @property
+    def has_gnss(self) -> bool:
+        return bool(self.g_valid.sum() >= 10)
+
+
+def _standstill(drive: Drive, speed: FloatArray) -> BoolArray:
+    """Wheels (smoothed ``speed``) and, where the drive has it, the GNSS Doppler at rest."""
+    still = np.abs(np.nan_to_num(speed, nan=1.0)) < STANDSTILL_MPS
+    if "gnss_ve" in drive and "gnss_vn" in drive:
+        vh = interpolate(np.hypot(drive["gnss_ve"], drive["gnss_vn"]), drive.t, 2.0)
+        still &= ~(np.nan_to_num(vh, nan=0.0) > 0.2)
+    return still
+
+
+def gyro_signals(drive: Drive, gnss_lever: tuple[float, float, float]) -> GyroSignals:
+    """The gyro-bias relation's signals of ``drive`` (a few row-grid passes, not all of
+    :func:`prepare`); ``gnss_lever`` the antenna lever arm (m, from the CG)."""
+    t = drive.t
+    raw = speed_raw(drive)
+    speed = (
+        moving_mean(t, interpolate(raw, t, MAX_GAP_S), SMOOTH_S)
+        if raw is not None
+        else np.full(t.size, np.nan)
+    )
+    wz_raw = drive["wz"]
+    wz = interpolate(wz_raw, t, MAX_GAP_S)
+    g = _gnss(drive, wz_raw, drive.get("wx"), gnss_lever)
+    return GyroSignals(
+        t=t,
+        yaw_int=_cumulative(t, wz),
+        standstill=_standstill(drive, speed) & np.isfinite(wz),
+        g_rows=g[0],
+        g_course=g[1],
+        g_run=g[8],
+        g_dt=g[6],
+        g_valid=g[7],
+    )
+
+
 def _tilt_cosine(drive: Drive, t: FloatArray, speed: FloatArray, wz: FloatArray) -> FloatArray:
     """cos(roll) cos(pitch) of the body from the accelerometer: the horizontal heading rate is
     ``w_z / (cos(phi) cos(theta))`` (Euler kinematics, ``w_z = psi' cos(phi) cos(theta) -
@@ -206,10 +261,7 @@ def prepare(drive: Drive, gnss_lever: tuple[float, float, float]) -> Signals:
     wz_interp = interpolate(wz_raw, t, MAX_GAP_S)
     yaw_int = _cumulative(t, wz_interp / _tilt_cosine(drive, t, speed, wz))
     g = _gnss(drive, wz_raw, drive.get("wx"), gnss_lever)
-    still = np.abs(np.nan_to_num(speed, nan=1.0)) < STANDSTILL_MPS
-    if "gnss_ve" in drive and "gnss_vn" in drive:
-        vh = interpolate(np.hypot(drive["gnss_ve"], drive["gnss_vn"]), t, 2.0)
-        still &= ~(np.nan_to_num(vh, nan=0.0) > 0.2)
+    still = _standstill(drive, speed)
     return Signals(
         t=t,
         speed=speed,

@@ -25,8 +25,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sideslip.calibrate.fit import clusters_of, fit_robust, informed
-from sideslip.calibrate.prepare import Signals
+from sideslip.calibrate.prepare import GyroSignals, Signals, gyro_signals
 from sideslip.calibrate.result import Fitted, left_alone
+from sideslip.drive import Drive
 
 FloatArray = NDArray[np.float64]
 
@@ -68,7 +69,7 @@ def wheel_speed_scale(sig: Signals) -> Fitted:
     )  # fmt: skip
 
 
-def gyro_bias_scale(sig: Signals) -> tuple[Fitted, Fitted]:
+def gyro_bias_scale(sig: Signals | GyroSignals) -> tuple[Fitted, Fitted]:
     """Gyro bias b_g (rad/s) and scale s_g (measured / true) from course changes and standstill."""
     X_parts: list[FloatArray] = []
     y_parts: list[FloatArray] = []
@@ -161,3 +162,24 @@ def gyro_bias_scale(sig: Signals) -> tuple[Fitted, Fitted]:
         else left_alone(scale_name, 1.0, "-", "too little GNSS course in turns (40 s): not observable")
     )
     return bias, scale
+
+
+def drive_gyro_bias(drive: Drive, gnss_lever: tuple[float, float, float]) -> Fitted:
+    """The drive's own gyro zero: :func:`gyro_bias_scale`'s bias from the GNSS course windows
+    and the standstill of the whole drive (``sideslip calibrate``'s value), prepared alone
+    (:func:`~sideslip.calibrate.prepare.gyro_signals`: a few passes over the rows, no more).
+
+    For the methods whose papers assume a zeroed gyro (seed 002's graph, seed 003's observers):
+    a raw MEMS gyro carries degrees per second (the comma2k19 phone: -3.9 deg/s), which those
+    models read as yaw.  Not informed (the value 0) when the drive has neither 40 s of GNSS
+    course nor 5 s of standstill; ``sideslip calibrate`` reports the same fit."""
+    bias, _scale = gyro_bias_scale(gyro_signals(drive, gnss_lever))
+    return bias
+
+
+def gyro_zero_params(zero: Fitted) -> dict[str, object]:
+    """A method's params entries for the drive's gyro zero it subtracted (:func:`drive_gyro_bias`)."""
+    if not zero.informed:
+        return {"gyro_zero_rad_s": 0.0, "gyro_zero_note": f"not told by the drive: {zero.note}"}
+    return {"gyro_zero_rad_s": zero.value, "gyro_zero_rad_s_sigma": zero.sigma,
+            "gyro_zero_source": zero.source}

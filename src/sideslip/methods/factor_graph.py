@@ -90,6 +90,8 @@ from functools import cached_property
 import numpy as np
 from numpy.typing import NDArray
 
+from sideslip.calibrate.result import Fitted
+from sideslip.calibrate.sensors import drive_gyro_bias, gyro_zero_params
 from sideslip.drive import Drive
 from sideslip.estimate import Estimate
 from sideslip.filters.banded import add_chain_factors, fixed_lag_chain, solve_chain
@@ -170,7 +172,9 @@ class GraphInputs:
     (m/s) used in the dynamic and the a_y factors (clamped, module docstring); ``low_speed``
     rows below the speed gate or reversing; ``time_gap`` steps longer than ``max_step``
     (length N - 1); ``wz`` and ``ay`` the raw samples as the drive stores them (float32 in a
-    compact drive, float64 otherwise; NaN where the sensor has no fresh sample).
+    compact drive, float64 otherwise; NaN where the sensor has no fresh sample); ``gyro_zero``
+    the drive's gyro zero the yaw-rate factors subtract (None: not asked for,
+    ``FactorGraphSettings.zero_gyro``).
     """
 
     t: FloatArray
@@ -181,6 +185,12 @@ class GraphInputs:
     low_speed: NDArray[np.bool_]
     wz: NDArray[np.floating]
     ay: NDArray[np.floating]
+    gyro_zero: Fitted | None = None
+
+    @property
+    def wz_zero(self) -> float:
+        """rad/s subtracted from every gyro sample (0 when the drive does not tell it)."""
+        return self.gyro_zero.value if self.gyro_zero is not None else 0.0
 
 
 def _as_stored_float(values: object) -> NDArray[np.floating]:
@@ -210,7 +220,8 @@ def graph_inputs(
     # the sensor samples as stored (float32 in a compact drive): the compiled factor pass reads
     # each one into double precision exactly, so no float64 copy of the drive is kept
     wz, ay = (_as_stored_float(drive.data[k]) for k in ("wz", "ay"))
-    return GraphInputs(t, delta, v_dynamics, v_measurement, gap, low, wz, ay)
+    zero = drive_gyro_bias(drive, vehicle.gnss_xyz) if settings.zero_gyro else None
+    return GraphInputs(t, delta, v_dynamics, v_measurement, gap, low, wz, ay, zero)
 
 
 def build_graph(
@@ -239,6 +250,7 @@ def build_graph(
         settings.reference_dt, settings.low_speed_inflation, settings.prior_beta,
         settings.prior_yaw_rate, settings.low_speed_beta,
     )  # fmt: skip
+    zu[:, 0] -= inputs.wz_zero  # the drive's gyro zero (rows without a sample have sigma inf)
     # low-speed kinematic sideslip (unary on beta_k)
     zu[low, 2] = np.arctan(vehicle.lr * np.tan(np.clip(delta[low], -1.2, 1.2)) / vehicle.wheelbase)
     return SideslipGraph(
@@ -490,6 +502,12 @@ def solve_kalman(graph: SideslipGraph) -> tuple[FloatArray, FloatArray, FloatArr
     )  # fmt: skip
 
 
+def _gyro_zero_params(zero: Fitted | None) -> dict[str, object]:
+    if zero is None:
+        return {"gyro_zero": "off (FactorGraphSettings.zero_gyro): the samples as recorded"}
+    return gyro_zero_params(zero)
+
+
 def _estimate(
     name: str,
     drive: Drive,
@@ -516,6 +534,7 @@ def _estimate(
         "tuning": prep.tuning.params(),
         "accelerometer": "raw lateral specific force (no roll/bank compensation, as the paper)",
         "low_speed_fraction": float(low_speed.mean()) if low_speed.size else 0.0,
+        **_gyro_zero_params(prep.inputs.gyro_zero),
         **extra,
     }
     out: dict[str, FloatArray] = {"beta": x[:, 0].copy(), "r": x[:, 1].copy()}

@@ -63,6 +63,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sideslip import gnss
+from sideslip.calibrate.result import Fitted
+from sideslip.calibrate.sensors import drive_gyro_bias, gyro_zero_params
 from sideslip.drive import Drive
 from sideslip.estimate import Estimate
 from sideslip.filters.excess import excess_innovation_variance
@@ -134,6 +136,10 @@ class MkfSettings:
     consistency_window_s : s, window of the NIS test (0 turns the inflation off).
     thrust_angle_sigma_rad : rad, 1-sigma of the rear-axle thrust angle behind beta_std (module
         docstring); 0 turns the term off.
+    zero_gyro : start the gyro-bias state at the drive's own zero with its 1-sigma (the bias of
+        its GNSS course windows and standstill over the whole drive,
+        :func:`sideslip.calibrate.sensors.drive_gyro_bias`) where the drive tells it, instead
+        of 0 +- ``SIGMA_BIAS0`` (1 deg/s; the comma2k19 phone's raw gyro has 3.9).
     """
 
     preset: Literal["auto", "paper", "typical"] = "auto"
@@ -148,6 +154,7 @@ class MkfSettings:
     bank_floor_sigma: float = 0.01
     consistency_window_s: float = 2.0
     thrust_angle_sigma_rad: float = THRUST_ANGLE_SIGMA
+    zero_gyro: bool = True
 
     def __post_init__(self) -> None:
         if self.preset not in ("auto", "paper", "typical"):
@@ -209,7 +216,7 @@ class MkfProblem:
     entry propagating row k-1 to k; ``u`` (N,2) inputs [delta, bank]; ``gyro`` (N) with NaN
     where no sample and ``gyro_var`` its variance; ``course``/``course_var``/``hr`` GNSS
     course; ``zero_rate`` rows at standstill; ``x0``, ``P0`` the prior; ``low`` rows in the
-    low-speed mode.
+    low-speed mode; ``gyro_zero`` the drive's zero the bias prior came from (None: not asked).
     """
 
     Ad: FloatArray
@@ -229,6 +236,7 @@ class MkfProblem:
     noise_choice: dict[str, Any] = field(default_factory=dict)
     gyro_sigma_100hz: float = SIGMA_GYRO_100HZ  # rad/s behind gyro_var, and its source
     gyro_sigma_source: str = "typical"
+    gyro_zero: Fitted | None = None
 
 
 def initial_heading(t: FloatArray, wz: FloatArray, course: FloatArray, drive: Drive | None = None) -> float:
@@ -278,13 +286,15 @@ def mkf_problem(
     tab = model_table(vehicle, t, speed, st.noise(), st.v_gate_m_s, split=tune_sy or tune_b)
     cm = gnss.course_at_cg(drive, vehicle, speed, st.v_gate_m_s)
     wz = drive["wz"]
-    x0 = np.array([0.0, 0.0, initial_heading(t, wz, cm.course, drive), 0.0])
-    P0 = np.diag([SIGMA_BETA0, SIGMA_R0, SIGMA_PSI0, SIGMA_BIAS0]) ** 2
+    zero = drive_gyro_bias(drive, vehicle.gnss_xyz) if st.zero_gyro else None
+    bias0, sigma_bias0 = (zero.value, zero.sigma) if zero and zero.informed else (0.0, SIGMA_BIAS0)
+    x0 = np.array([0.0, 0.0, initial_heading(t, wz - bias0 if bias0 else wz, cm.course, drive), bias0])
+    P0 = np.diag([SIGMA_BETA0, SIGMA_R0, SIGMA_PSI0, sigma_bias0]) ** 2
     g_sigma, g_source = gyro_sigma(drive, st)
     prob = MkfProblem(
         tab.Ad, tab.Bd, tab.Qd, tab.idx, u, wz, sample_variance(t, g_sigma), cm.course,
         cm.sigma**2, cm.hr, np.abs(speed) < STANDSTILL_SPEED, x0, P0, tab.low,
-        gyro_sigma_100hz=g_sigma, gyro_sigma_source=g_source,
+        gyro_sigma_100hz=g_sigma, gyro_sigma_source=g_source, gyro_zero=zero,
     )  # fmt: skip
     if not (tune_sy or tune_b):
         return prob
@@ -461,10 +471,13 @@ def mkf_estimate(
     prob = mkf_problem(drive, vehicle, bank, settings, speed=speed)
     res = run_mkf_problem(prob)
     steer = prob.u[:, 0].copy() if settings.stiffness_rel_sigma > 0 else None
-    problem_params = {
+    problem_params: dict[str, Any] = {
         "low_speed_fraction": float(np.mean(prob.low)),
         "gnss_course_updates": int(np.isfinite(prob.course).sum()),
     }
+    if prob.gyro_zero is not None:
+        problem_params["gyro_bias_start"] = {
+            **gyro_zero_params(prob.gyro_zero), "else": "0 +- SIGMA_BIAS0 (the drive does not tell it)"}
     noise_params = _process_noise_params(settings, prob)
     g_sigma, g_source = prob.gyro_sigma_100hz, prob.gyro_sigma_source
     del prob

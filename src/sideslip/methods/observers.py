@@ -64,7 +64,7 @@ inherits all of the model's error, so the poles are set at about twice the plant
 Outputs: ``beta`` (rad, CG), ``r`` (rad/s: the observer's r_hat for ``obs_bicycle``; the zeroed
 gyro for the modified observers, whose r_hat absorbs the mismatch between a_y and the model by
 design -- eq 36 frees the beta error from the model precisely by letting r~ carry it -- and is
-no yaw-rate estimate), ``gyro_bias`` (the standstill zeroing), and for the observers that run
+no yaw-rate estimate), ``gyro_bias`` (the gyro zeroing), and for the observers that run
 the roll index ``roll`` and ``bank``; ``vx``, ``vy`` for ``obs_kinematic``.
 
 Discretisation: the closed-loop matrix A - K C has the double eigenvalue p by construction, so
@@ -78,7 +78,10 @@ Low speed, standstill, reversing: the model matrices use max(|v_x|, ``V_GATE``).
 following beta = atan2(v_y, v_x)), r = measured, and the observer restarts from there when the
 speed rises again.  The state is clipped to |beta| <= 1.2 rad, |r| <= 5 rad/s; every output is
 finite on every row.  The gyro is zeroed at standstill (see
-:func:`sideslip.methods.roll_index.standstill_gyro_bias`); the accelerometer is assumed zeroed
+:func:`sideslip.methods.roll_index.standstill_gyro_bias`) and, before the first standstill, by
+the drive's own zero from its GNSS course (:func:`sideslip.calibrate.sensors.drive_gyro_bias`:
+a raw phone gyro's 3.9 deg/s put obs_kinematic 24.9 deg off on the comma2k19 minute, 0.21
+with the zero; realdata_check.md); the accelerometer is assumed zeroed
 (the paper's assumption) and the IMU at the CG (lever arms are ignored).
 Reversing follows the contract's beta = atan2(v_y, v_x) (about +-pi, as the reference
 ``ref_beta`` of the simulator and of the converters), not a forward-equivalent small angle.
@@ -399,10 +402,13 @@ class BicycleObserverSettings:
     changes from scenario to scenario with no pattern in what a drive measures (sensor noise,
     speed, a_y), and no fixed choice beats -20 on both files for both observers (mean beta
     RMSE obs_bicycle 0.327 / 0.234 / 0.324 deg, obs_modified 0.167 / 0.139 / 0.132 deg).
+    ``zero_gyro``: before the standstill zeroing starts, subtract the drive's own gyro zero
+    (module docstring); False keeps the samples as recorded until then.
     """
 
     pole_rad_s: float = P_BICYCLE
     v_gate_m_s: float = V_GATE
+    zero_gyro: bool = True
 
     def __post_init__(self) -> None:
         name = type(self).__name__
@@ -418,12 +424,13 @@ class KinematicObserverSettings:
     """Tuning of ``obs_kinematic``: ``alpha`` (-, poles at -alpha |r|, > 1 so K2 keeps the sign
     of r), ``r_observable_rad_s`` (yaw rate below which v_y is taken as weakly observable),
     ``tau_straight_s`` (pull of v_y to 0 when straight), ``v_gate_m_s`` (speed gate).  Fixed,
-    for the reason given in :class:`BicycleObserverSettings`."""
+    for the reason given in :class:`BicycleObserverSettings`.  ``zero_gyro`` as there."""
 
     alpha: float = ALPHA
     r_observable_rad_s: float = R_OBSERVABLE
     tau_straight_s: float = TAU_STRAIGHT
     v_gate_m_s: float = V_GATE
+    zero_gyro: bool = True
 
     def __post_init__(self) -> None:
         name = type(self).__name__
@@ -468,7 +475,7 @@ def obs_bicycle(drive: Drive, vehicle: Vehicle,
                 settings: BicycleObserverSettings | None = None) -> Estimate:
     """Sideslip from the single-track model corrected by the gyro (module docstring)."""
     st = settings or BicycleObserverSettings()
-    inp = sensor_inputs(drive)
+    inp = sensor_inputs(drive, vehicle.gnss_xyz if st.zero_gyro else None)
     fresh = _fresh(drive, "wz")
     beta, r_hat = run_bicycle_observer(inp, vehicle, fresh, st.pole_rad_s, st.v_gate_m_s)
     health, summary = observer_health(
@@ -476,7 +483,7 @@ def obs_bicycle(drive: Drive, vehicle: Vehicle,
         inp.ay_m, inputs_fresh=_fresh(drive, "steer"))
     return Estimate("obs_bicycle", drive.t,
                     {"beta": beta, "r": r_hat, "gyro_bias": inp.gyro_bias, "health": health},
-                    _params(st, summary))
+                    _params(st, summary, **inp.gyro_zero_params()))
 
 
 @register(
@@ -492,7 +499,7 @@ def obs_kinematic(drive: Drive, vehicle: Vehicle,
                   settings: KinematicObserverSettings | None = None) -> Estimate:
     """Kinematic observer with the roll-compensated lateral acceleration (module docstring)."""
     st = settings or KinematicObserverSettings()
-    inp = sensor_inputs(drive)
+    inp = sensor_inputs(drive, vehicle.gnss_xyz if st.zero_gyro else None)
     roll = estimate_roll_index(inp, vehicle)
     ay = compensate_ay(inp.ay_m, roll.roll)
     beta, vx, vy = run_kinematic_observer(inp, vehicle, ay, st.alpha, st.v_gate_m_s,
@@ -509,13 +516,14 @@ def obs_kinematic(drive: Drive, vehicle: Vehicle,
         {"alpha": st.alpha, "r_observable_rad_s": st.r_observable_rad_s,
          "tau_straight_s": st.tau_straight_s, "v_gate_m_s": st.v_gate_m_s,
          "gains": "fixed (see KinematicObserverSettings)", "health": summary,
-         "speed_source": "rear wheels, else all wheels, else v_can", **roll.params},
+         "speed_source": "rear wheels, else all wheels, else v_can", **roll.params,
+         **inp.gyro_zero_params()},
     )
 
 
 def _modified(drive: Drive, vehicle: Vehicle, st: BicycleObserverSettings, compensate: bool
               ) -> tuple[dict[str, FloatArray], dict[str, object]]:
-    inp = sensor_inputs(drive)
+    inp = sensor_inputs(drive, vehicle.gnss_xyz if st.zero_gyro else None)
     fresh = _fresh(drive, "wz", "ay")
     series: dict[str, FloatArray] = {}
     extra: dict[str, object] = {}
@@ -536,7 +544,7 @@ def _modified(drive: Drive, vehicle: Vehicle, st: BicycleObserverSettings, compe
         {"r": _fresh_residual(inp.r - r_hat, fresh), "ay": _fresh_residual(res_ay, fresh)},
         inp.ay_m, inputs_fresh=_fresh(drive, "steer"))
     series.update(beta=beta, r=inp.r, gyro_bias=inp.gyro_bias, health=health)
-    return series, _params(st, summary, **extra)
+    return series, _params(st, summary, **extra, **inp.gyro_zero_params())
 
 
 @register(

@@ -71,6 +71,8 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.signal import butter, sosfilt, sosfilt_zi
 
+from sideslip.calibrate.result import Fitted
+from sideslip.calibrate.sensors import drive_gyro_bias, gyro_zero_params
 from sideslip.drive import Drive
 from sideslip.estimate import Estimate
 from sideslip.methods.observer_health import stale_health
@@ -123,10 +125,12 @@ ROLL_PARAMS = (
 class RollSettings:
     """Tuning of ``roll_index`` and ``roll_dfc``: ``roll_cutoff_hz`` (Hz, low-pass of the roll
     channels), ``identify_roll_gradient`` (use the drive's suspension roll gradient where it
-    contradicts the file, :mod:`sideslip.methods.roll_gradient`)."""
+    contradicts the file, :mod:`sideslip.methods.roll_gradient`), ``zero_gyro`` (subtract the
+    drive's own gyro zero before the standstill zeroing starts, :func:`sensor_inputs`)."""
 
     roll_cutoff_hz: float = ROLL_CUTOFF_HZ
     identify_roll_gradient: bool = True
+    zero_gyro: bool = True
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.roll_cutoff_hz) and 0.05 <= self.roll_cutoff_hz <= 20.0):
@@ -140,9 +144,11 @@ class Inputs:
 
     ay_m: lateral specific force; r: yaw rate minus ``gyro_bias``; vx: longitudinal speed
     (signed when the sensor is); delta: road-wheel angle; gyro_bias: the standstill gyro mean
-    used (rad/s, 0 until ``STANDSTILL_MIN_S`` of standstill has been seen); ax: longitudinal
-    specific force (zeros when the drive has no ``ax``); speed_fresh: rows with a new speed
-    sample; speed_dt: time since the previous speed sample at those rows (s).
+    used (rad/s; until ``STANDSTILL_MIN_S`` of standstill has been seen, the drive's own zero
+    ``gyro_zero`` where it has one, else 0); ax: longitudinal specific force (zeros when the
+    drive has no ``ax``); speed_fresh: rows with a new speed sample; speed_dt: time since the
+    previous speed sample at those rows (s); gyro_zero: the drive's zero that was asked for
+    (None when not).
     """
 
     t: FloatArray
@@ -154,6 +160,14 @@ class Inputs:
     gyro_bias: FloatArray
     speed_fresh: BoolArray
     speed_dt: FloatArray
+    gyro_zero: Fitted | None = None
+
+    def gyro_zero_params(self) -> dict[str, object]:
+        """The drive's gyro zero for a method's params (empty when it was not asked for)."""
+        if self.gyro_zero is None:
+            return {}
+        return {**gyro_zero_params(self.gyro_zero),
+                "gyro_zero_use": "the rows before STANDSTILL_MIN_S of standstill"}
 
 
 @numba.njit(cache=True)
@@ -182,9 +196,10 @@ def _held(drive: Drive, name: str) -> FloatArray:
 
 
 @numba.njit(cache=True)
-def _gyro_bias_nb(t: FloatArray, wz: FloatArray, still: BoolArray, min_s: float
-                  ) -> FloatArray:  # pragma: no cover - compiled
-    """Running standstill mean of ``wz`` (see :func:`standstill_gyro_bias`), one pass."""
+def _gyro_bias_nb(t: FloatArray, wz: FloatArray, still: BoolArray, min_s: float,
+                  before: float) -> FloatArray:  # pragma: no cover - compiled
+    """Running standstill mean of ``wz`` (see :func:`standstill_gyro_bias`), one pass;
+    ``before`` on the rows before enough standstill has been seen."""
     n = t.size
     out = np.empty(n)
     count = 0
@@ -196,18 +211,22 @@ def _gyro_bias_nb(t: FloatArray, wz: FloatArray, still: BoolArray, min_s: float
             total += wz[k]
             seen += t[k] - t[k - 1] if k > 0 else 0.0
         bias = total / max(count, 1) if count > 0 else 0.0
-        out[k] = bias if seen >= min_s else 0.0
+        out[k] = bias if seen >= min_s else before
     return out
 
 
-def standstill_gyro_bias(t: FloatArray, wz: FloatArray, still: BoolArray) -> FloatArray:
+def standstill_gyro_bias(t: FloatArray, wz: FloatArray, still: BoolArray, before: float = 0.0
+                         ) -> FloatArray:
     """Causal gyro zeroing (the paper assumes zeroed sensors, refs [26, 27]).
 
     Running mean of ``wz`` over the standstill rows seen so far, used once at least
-    ``STANDSTILL_MIN_S`` of standstill has accumulated; 0 before.  rad/s on every row.
+    ``STANDSTILL_MIN_S`` of standstill has accumulated; ``before`` (rad/s, e.g. the drive's
+    own zero, :func:`sideslip.calibrate.sensors.drive_gyro_bias`) until then.  rad/s on every
+    row.
     """
     return np.asarray(_gyro_bias_nb(np.asarray(t, dtype=float), np.asarray(wz, dtype=float),
-                                    np.asarray(still, dtype=np.bool_), STANDSTILL_MIN_S))
+                                    np.asarray(still, dtype=np.bool_), STANDSTILL_MIN_S,
+                                    float(before)))
 
 
 @numba.njit(cache=True)
@@ -223,11 +242,16 @@ def _sample_steps(t: FloatArray, fresh: BoolArray, first_dt: float
     return out
 
 
-def sensor_inputs(drive: Drive) -> Inputs:
-    """Hold the sensors onto every row; zero the gyro at standstill; see :class:`Inputs`.
+def sensor_inputs(drive: Drive, gnss_lever: tuple[float, float, float] | None = None) -> Inputs:
+    """Hold the sensors onto every row; zero the gyro; see :class:`Inputs`.
 
-    The standstill rows are those of :func:`sideslip.signals.standstill`, computed from the
-    held speed ``vx`` (the same hold of the same samples) rather than a second pass."""
+    The gyro is zeroed at standstill (:func:`standstill_gyro_bias`, causal); on the rows
+    before ``STANDSTILL_MIN_S`` of standstill, with the drive's own zero (the bias of its GNSS
+    course windows and standstill, :func:`sideslip.calibrate.sensors.drive_gyro_bias`, a
+    calibration of the whole drive as the papers' "zeroed sensors" are) when ``gnss_lever``
+    (the antenna lever arm, m) is given and the drive informs it, else 0.  The standstill rows
+    are those of :func:`sideslip.signals.standstill`, computed from the held speed ``vx`` (the
+    same hold of the same samples) rather than a second pass."""
     t = drive.t
     raw_speed = speed_raw(drive)
     if raw_speed is None:
@@ -240,7 +264,8 @@ def sensor_inputs(drive: Drive) -> Inputs:
         still = np.abs(vx) < STANDSTILL_SPEED
     speed_dt = np.asarray(_sample_steps(t, fresh, drive.dt_median if fresh.any() else 0.0))
     wz = drive["wz"] if "wz" in drive else np.zeros_like(t)
-    bias = standstill_gyro_bias(t, wz, still)
+    zero = drive_gyro_bias(drive, gnss_lever) if gnss_lever is not None and "wz" in drive else None
+    bias = standstill_gyro_bias(t, wz, still, zero.value if zero is not None else 0.0)
     return Inputs(
         t=t,
         ay_m=_held(drive, "ay"),
@@ -251,6 +276,7 @@ def sensor_inputs(drive: Drive) -> Inputs:
         gyro_bias=bias,
         speed_fresh=fresh,
         speed_dt=speed_dt,
+        gyro_zero=zero,
     )
 
 
@@ -523,7 +549,7 @@ def roll_index(drive: Drive, vehicle: Vehicle, settings: RollSettings | None = N
                ) -> Estimate:
     """Total roll and road bank by the roll index (see module docstring)."""
     st = settings or RollSettings()
-    inp = sensor_inputs(drive)
+    inp = sensor_inputs(drive, vehicle.gnss_xyz if st.zero_gyro else None)
     est = estimate_roll_index(inp, vehicle, st.identify_roll_gradient, st.roll_cutoff_hz)
     health, summary = roll_index_health(inp, est, _imu_fresh(drive))
     return Estimate(
@@ -541,6 +567,7 @@ def roll_index(drive: Drive, vehicle: Vehicle, settings: RollSettings | None = N
             "flag_cutoff_hz": FLAG_CUTOFF_HZ,
             "understeer_gradient": vehicle.understeer_gradient,
             "roll_dynamics_assumed": roll_dynamics(vehicle)[2],
+            **inp.gyro_zero_params(),
         },
     )
 
@@ -562,7 +589,7 @@ def roll_dfc(drive: Drive, vehicle: Vehicle, settings: RollSettings | None = Non
     ``identify_roll_gradient`` of the settings does not apply (eq 58's roll does not use it).
     """
     st = settings or RollSettings()
-    inp = sensor_inputs(drive)
+    inp = sensor_inputs(drive, vehicle.gnss_xyz if st.zero_gyro else None)
     roll, bank, w = estimate_roll_dfc(inp, vehicle, st.roll_cutoff_hz)
     health = np.where(np.abs(inp.vx) >= V_MIN, 1.0 - w, 0.0)
     health = np.maximum(health, stale_health(inp.t, _imu_fresh(drive)))
@@ -572,5 +599,6 @@ def roll_dfc(drive: Drive, vehicle: Vehicle, settings: RollSettings | None = Non
         {"roll": roll, "bank": bank, "gyro_bias": inp.gyro_bias, "health": health},
         {"v_min_mps": V_MIN, "roll_cutoff_hz": st.roll_cutoff_hz,
          "understeer_gradient": vehicle.understeer_gradient,
-         "health": {"criterion": "1 - w of eq 58", "flagged_share": _fraction(health > 0)}},
+         "health": {"criterion": "1 - w of eq 58", "flagged_share": _fraction(health > 0)},
+         **inp.gyro_zero_params()},
     )
