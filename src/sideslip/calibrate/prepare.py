@@ -23,6 +23,7 @@ from numpy.typing import NDArray
 
 from sideslip.drive import Drive
 from sideslip.frames import unwrap_angle
+from sideslip.gnss import velocity_samples
 from sideslip.signals import interpolate, speed_raw, speed_source
 from sideslip.vehicle import G
 
@@ -113,7 +114,15 @@ class Signals:
         return bool(self.g_valid.sum() >= 10)
 
 
-def _gnss(drive: Drive, wz: FloatArray, wx: FloatArray | None, lever: tuple[float, float, float]) -> tuple:
+def _gnss(
+    drive: Drive,
+    wz: FloatArray,
+    wx: FloatArray | None,
+    lever: tuple[float, float, float],
+    velocity: tuple[FloatArray, FloatArray] | None = None,
+) -> tuple:
+    """The GNSS grid of :class:`Signals` from the Doppler velocity, or from ``velocity`` (east,
+    north per row, NaN where none) when given."""
     t = drive.t
     empty = np.zeros(0)
     none = (
@@ -128,10 +137,13 @@ def _gnss(drive: Drive, wz: FloatArray, wx: FloatArray | None, lever: tuple[floa
         np.zeros(0, dtype=np.intp),
         empty,
     )
-    if not ("gnss_ve" in drive and "gnss_vn" in drive):
+    if velocity is not None:
+        ve, vn = velocity
+    elif "gnss_ve" in drive and "gnss_vn" in drive:
+        ve, vn = drive["gnss_ve"], drive["gnss_vn"]
+    else:
         return none
-    ve, vn = drive["gnss_ve"], drive["gnss_vn"]
-    vu = drive["gnss_vu"] if "gnss_vu" in drive else np.zeros_like(ve)
+    vu = drive["gnss_vu"] if "gnss_vu" in drive and velocity is None else np.zeros_like(ve)
     vu = np.where(np.isfinite(vu), vu, 0.0)
     vh = np.hypot(ve, vn)
     fresh = np.flatnonzero(np.isfinite(vh))
@@ -179,7 +191,9 @@ class GyroSignals:
     """What the gyro-bias relation needs (:func:`sideslip.calibrate.sensors.gyro_bias_scale`),
     prepared alone: ``yaw_int`` the integral of the raw (interpolated) ``wz`` (rad, no tilt
     correction: that is a scale, not a bias), ``standstill`` rows, and the GNSS course grid of
-    :class:`Signals` (``g_rows``, ``g_course``, ``g_run``, ``g_dt``, ``g_valid``)."""
+    :class:`Signals` (``g_rows``, ``g_course``, ``g_run``, ``g_dt``, ``g_valid``), whose course
+    comes from ``course_source``: "Doppler", or "positions" (differenced fixes,
+    :func:`sideslip.gnss.velocity_samples`) on a drive without Doppler velocity."""
 
     t: FloatArray
     yaw_int: FloatArray
@@ -189,6 +203,7 @@ class GyroSignals:
     g_run: IntArray
     g_dt: float
     g_valid: BoolArray
+    course_source: str = "Doppler"
 
     @property
     def has_gnss(self) -> bool:
@@ -216,7 +231,14 @@ def gyro_signals(drive: Drive, gnss_lever: tuple[float, float, float]) -> GyroSi
     )
     wz_raw = drive["wz"]
     wz = interpolate(wz_raw, t, MAX_GAP_S)
-    g = _gnss(drive, wz_raw, drive.get("wx"), gnss_lever)
+    velocity, source = None, "Doppler"
+    if not ("gnss_ve" in drive and "gnss_vn" in drive):
+        vel = velocity_samples(drive, use_positions=True)
+        if vel.rows.size:
+            ve, vn = np.full(t.size, np.nan), np.full(t.size, np.nan)
+            ve[vel.rows], vn[vel.rows] = vel.ve, vel.vn
+            velocity, source = (ve, vn), "positions"
+    g = _gnss(drive, wz_raw, drive.get("wx"), gnss_lever, velocity)
     return GyroSignals(
         t=t,
         yaw_int=_cumulative(t, wz),
@@ -226,6 +248,7 @@ def gyro_signals(drive: Drive, gnss_lever: tuple[float, float, float]) -> GyroSi
         g_run=g[8],
         g_dt=g[6],
         g_valid=g[7],
+        course_source=source,
     )
 
 

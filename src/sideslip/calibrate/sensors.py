@@ -20,6 +20,7 @@ average bias (the bias walks; the robust 1-sigma covers the walk between stops).
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -171,15 +172,41 @@ def drive_gyro_bias(drive: Drive, gnss_lever: tuple[float, float, float]) -> Fit
 
     For the methods whose papers assume a zeroed gyro (seed 002's graph, seed 003's observers):
     a raw MEMS gyro carries degrees per second (the comma2k19 phone: -3.9 deg/s), which those
-    models read as yaw.  Not informed (the value 0) when the drive has neither 40 s of GNSS
-    course nor 5 s of standstill; ``sideslip calibrate`` reports the same fit."""
-    bias, _scale = gyro_bias_scale(gyro_signals(drive, gnss_lever))
+    models read as yaw.  Without Doppler velocity the course comes from differenced GNSS
+    positions (noisier: the fit's own 1-sigma decides whether it informs the bias).  Not
+    informed (the value 0) when the drive has neither 40 s of GNSS course nor 5 s of
+    standstill, or the fit's 1-sigma stays above a quarter of its 1 deg/s prior; with Doppler,
+    ``sideslip calibrate`` reports the same fit."""
+    sig = gyro_signals(drive, gnss_lever)
+    bias, _scale = gyro_bias_scale(sig)
+    if bias.informed and sig.course_source != "Doppler" and sig.has_gnss:
+        bias = replace(bias, source=f"{bias.source} (course from GNSS {sig.course_source})")
     return bias
 
 
-def gyro_zero_params(zero: Fitted) -> dict[str, object]:
-    """A method's params entries for the drive's gyro zero it subtracted (:func:`drive_gyro_bias`)."""
+ZERO_SIGNIFICANCE = 2.0  # a zero is subtracted when |b| exceeds this many of its 1-sigma
+
+
+def subtracted_zero(zero: Fitted) -> float:
+    """The part of the drive's gyro zero a method without a bias state subtracts (rad/s): the
+    zero where the drive tells it and it differs from 0 by more than ``ZERO_SIGNIFICANCE`` of
+    its 1-sigma, else 0.  A calibrated gyro (bias near 0) then keeps its samples rather than
+    take on the fit's noise (positions-only course: 1-sigma up to 0.18 deg/s on the simulated
+    race lap); a raw gyro's degrees per second are far beyond it."""
+    if not zero.informed or abs(zero.value) <= ZERO_SIGNIFICANCE * zero.sigma:
+        return 0.0
+    return zero.value
+
+
+def gyro_zero_params(zero: Fitted, subtracted: bool = True) -> dict[str, object]:
+    """A method's params entries for the drive's gyro zero (:func:`drive_gyro_bias`);
+    ``subtracted``: the method subtracts it (:func:`subtracted_zero`) rather than starting a
+    bias state from it."""
     if not zero.informed:
         return {"gyro_zero_rad_s": 0.0, "gyro_zero_note": f"not told by the drive: {zero.note}"}
-    return {"gyro_zero_rad_s": zero.value, "gyro_zero_rad_s_sigma": zero.sigma,
-            "gyro_zero_source": zero.source}
+    out: dict[str, object] = {"gyro_zero_rad_s": zero.value, "gyro_zero_rad_s_sigma": zero.sigma,
+                              "gyro_zero_source": zero.source}
+    if subtracted and subtracted_zero(zero) == 0.0:
+        out["gyro_zero_note"] = (f"within {ZERO_SIGNIFICANCE:g} sigma of 0: not subtracted, the "
+                                 "samples as recorded")
+    return out

@@ -91,7 +91,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sideslip.calibrate.result import Fitted
-from sideslip.calibrate.sensors import drive_gyro_bias, gyro_zero_params
+from sideslip.calibrate.sensors import drive_gyro_bias, gyro_zero_params, subtracted_zero
 from sideslip.drive import Drive
 from sideslip.estimate import Estimate
 from sideslip.filters.banded import add_chain_factors, fixed_lag_chain, solve_chain
@@ -189,8 +189,8 @@ class GraphInputs:
 
     @property
     def wz_zero(self) -> float:
-        """rad/s subtracted from every gyro sample (0 when the drive does not tell it)."""
-        return self.gyro_zero.value if self.gyro_zero is not None else 0.0
+        """rad/s subtracted from every gyro sample (:func:`~sideslip.calibrate.sensors.subtracted_zero`)."""
+        return subtracted_zero(self.gyro_zero) if self.gyro_zero is not None else 0.0
 
 
 def _as_stored_float(values: object) -> NDArray[np.floating]:

@@ -54,10 +54,11 @@ class FactorGraphSettings:
     consistency : inflate the 1-sigma where the windowed NIS of the factors' residuals exceeds
         its chi^2 bound (:mod:`sideslip.filters.consistency`), and report ``health``.
     zero_gyro : subtract the drive's own gyro zero from the yaw-rate factors (the bias of its
-        GNSS course windows and standstill, :func:`sideslip.calibrate.sensors.drive_gyro_bias`;
-        0 where the drive does not tell it).  The paper's gyro is a calibrated INS; a raw MEMS
-        gyro's bias is read as yaw by the model (the comma2k19 phone's -3.9 deg/s: kf_linear
-        0.170 -> 0.095 deg, fg_lag 0.122 -> 0.094).  False: the samples as recorded.
+        GNSS course windows and standstill, :func:`sideslip.calibrate.sensors.drive_gyro_bias`,
+        where more than 2 sigma from 0: :func:`~sideslip.calibrate.sensors.subtracted_zero`).
+        The paper's gyro is a calibrated INS; a raw MEMS gyro's bias is read as yaw by the
+        model (the comma2k19 phone's -3.9 deg/s: kf_linear 0.170 -> 0.093 deg, fg_lag 0.122 ->
+        0.093).  False: the samples as recorded.
     stiffness_rel_sigma : 1-sigma relative error of the vehicle file's cornering stiffness,
         added to beta's variance as (stiffness_rel_sigma x the larger axle slip angle)^2.  A stiffness
         scaled by s moves the slip angle inferred from a force by (1 - 1/s) of itself, the same

@@ -604,6 +604,6 @@ def kkf(drive: Drive, vehicle: Vehicle, settings: KkfSettings | None = None) -> 
         "settings": settings_dict(st),
     }
     if res.gyro_zero is not None:
-        params["gyro_bias_start"] = {**gyro_zero_params(res.gyro_zero),
+        params["gyro_bias_start"] = {**gyro_zero_params(res.gyro_zero, subtracted=False),
                                      "else": "0 +- SIGMA_BIAS0 (the drive does not tell it)"}
     return Estimate("kkf", t, series, params, {"course": res.innov, "course_nis": nis})

@@ -477,7 +477,8 @@ def mkf_estimate(
     }
     if prob.gyro_zero is not None:
         problem_params["gyro_bias_start"] = {
-            **gyro_zero_params(prob.gyro_zero), "else": "0 +- SIGMA_BIAS0 (the drive does not tell it)"}
+            **gyro_zero_params(prob.gyro_zero, subtracted=False),
+            "else": "0 +- SIGMA_BIAS0 (the drive does not tell it)"}
     noise_params = _process_noise_params(settings, prob)
     g_sigma, g_source = prob.gyro_sigma_100hz, prob.gyro_sigma_source
     del prob

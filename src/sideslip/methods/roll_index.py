@@ -72,7 +72,7 @@ from numpy.typing import NDArray
 from scipy.signal import butter, sosfilt, sosfilt_zi
 
 from sideslip.calibrate.result import Fitted
-from sideslip.calibrate.sensors import drive_gyro_bias, gyro_zero_params
+from sideslip.calibrate.sensors import drive_gyro_bias, gyro_zero_params, subtracted_zero
 from sideslip.drive import Drive
 from sideslip.estimate import Estimate
 from sideslip.methods.observer_health import stale_health
@@ -249,7 +249,8 @@ def sensor_inputs(drive: Drive, gnss_lever: tuple[float, float, float] | None = 
     before ``STANDSTILL_MIN_S`` of standstill, with the drive's own zero (the bias of its GNSS
     course windows and standstill, :func:`sideslip.calibrate.sensors.drive_gyro_bias`, a
     calibration of the whole drive as the papers' "zeroed sensors" are) when ``gnss_lever``
-    (the antenna lever arm, m) is given and the drive informs it, else 0.  The standstill rows
+    (the antenna lever arm, m) is given and the zero is more than 2 sigma from 0
+    (:func:`sideslip.calibrate.sensors.subtracted_zero`), else 0.  The standstill rows
     are those of :func:`sideslip.signals.standstill`, computed from the held speed ``vx`` (the
     same hold of the same samples) rather than a second pass."""
     t = drive.t
@@ -265,7 +266,7 @@ def sensor_inputs(drive: Drive, gnss_lever: tuple[float, float, float] | None = 
     speed_dt = np.asarray(_sample_steps(t, fresh, drive.dt_median if fresh.any() else 0.0))
     wz = drive["wz"] if "wz" in drive else np.zeros_like(t)
     zero = drive_gyro_bias(drive, gnss_lever) if gnss_lever is not None and "wz" in drive else None
-    bias = standstill_gyro_bias(t, wz, still, zero.value if zero is not None else 0.0)
+    bias = standstill_gyro_bias(t, wz, still, subtracted_zero(zero) if zero is not None else 0.0)
     return Inputs(
         t=t,
         ay_m=_held(drive, "ay"),
