@@ -68,7 +68,7 @@ def single_output_gain(A: ArrayLike, p: float | ArrayLike) -> FloatArray:
     return K
 
 
-def reachable_pole(A: ArrayLike, p: float, coupling_ref: float) -> FloatArray:
+def reachable_pole(A: ArrayLike, p: float, coupling_ref: float | ArrayLike) -> FloatArray:
     """Double pole (N,) to ask of :func:`single_output_gain` when a21 may be tiny.
 
     With y = x_2, the gain on x_1 is k1 = (p - a11)^2 / a21 + a12: as a21 -> 0 (x_1 barely
@@ -76,10 +76,10 @@ def reachable_pole(A: ArrayLike, p: float, coupling_ref: float) -> FloatArray:
     in a21 then puts a pole at 2p - a11, unstable when a11 < 2p.  The double pole
     p_eff = a11 + (p - a11) c, c = min(1, |a21| / coupling_ref), keeps k1 bounded
     (k1 -> a12 as a21 -> 0: x_1 then follows its own model pole a11, which is stable when
-    a11 < 0) and equals ``p`` whenever |a21| >= coupling_ref.
+    a11 < 0) and equals ``p`` whenever |a21| >= coupling_ref (a scalar, or one per system).
     """
     a = np.asarray(A, dtype=float).reshape(-1, 2, 2)
-    c = np.minimum(1.0, np.abs(a[:, 1, 0]) / coupling_ref)
+    c = np.minimum(1.0, np.abs(a[:, 1, 0]) / np.asarray(coupling_ref, dtype=float))
     return np.asarray(a[:, 0, 0] + (p - a[:, 0, 0]) * c, dtype=float)
 
 
