@@ -210,6 +210,15 @@ class GyroSignals:
         return bool(self.g_valid.sum() >= 10)
 
 
+def _smoothed_speed(drive: Drive) -> FloatArray:
+    """The methods' speed (:func:`sideslip.signals.speed_raw`) on the row grid, smoothed; NaN
+    without a speed column."""
+    raw = speed_raw(drive)
+    if raw is None:
+        return np.full(drive.t.size, np.nan)
+    return moving_mean(drive.t, interpolate(raw, drive.t, MAX_GAP_S), SMOOTH_S)
+
+
 def _standstill(drive: Drive, speed: FloatArray) -> BoolArray:
     """Wheels (smoothed ``speed``) and, where the drive has it, the GNSS Doppler at rest."""
     still = np.abs(np.nan_to_num(speed, nan=1.0)) < STANDSTILL_MPS
@@ -223,12 +232,7 @@ def gyro_signals(drive: Drive, gnss_lever: tuple[float, float, float]) -> GyroSi
     """The gyro-bias relation's signals of ``drive`` (a few row-grid passes, not all of
     :func:`prepare`); ``gnss_lever`` the antenna lever arm (m, from the CG)."""
     t = drive.t
-    raw = speed_raw(drive)
-    speed = (
-        moving_mean(t, interpolate(raw, t, MAX_GAP_S), SMOOTH_S)
-        if raw is not None
-        else np.full(t.size, np.nan)
-    )
+    speed = _smoothed_speed(drive)
     wz_raw = drive["wz"]
     wz = interpolate(wz_raw, t, MAX_GAP_S)
     velocity, source = None, "Doppler"
@@ -272,12 +276,7 @@ def _tilt_cosine(drive: Drive, t: FloatArray, speed: FloatArray, wz: FloatArray)
 def prepare(drive: Drive, gnss_lever: tuple[float, float, float]) -> Signals:
     """Prepare the signals of ``drive``; ``gnss_lever`` the antenna lever arm (m, from the CG)."""
     t = drive.t
-    raw = speed_raw(drive)
-    speed = (
-        moving_mean(t, interpolate(raw, t, MAX_GAP_S), SMOOTH_S)
-        if raw is not None
-        else np.full(t.size, np.nan)
-    )
+    speed = _smoothed_speed(drive)
     wz_raw = drive["wz"]
     wz = moving_mean(t, interpolate(wz_raw, t, MAX_GAP_S), SMOOTH_S)
     wx = _smoothed(drive, "wx")
