@@ -1,8 +1,10 @@
 """Drives shared by the seed-001 filter tests (kkf, mkf, mkf_adaptive): a linear-model drive
-with an analytic truth and an awkward drive (standstill, reverse, outage, gaps)."""
+with an analytic truth, an awkward drive (standstill, reverse, outage, gaps) and a raw phone
+gyro's drive."""
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -13,6 +15,24 @@ from sideslip.models.single_track import steady_state as st_gain
 from sideslip.vehicle import Vehicle, load_vehicle
 
 BLAZER = load_vehicle("blazer_suv")
+
+
+@functools.lru_cache(maxsize=1)
+def raw_gyro_demo() -> Drive:
+    """demo, seed 3, with a turn-on gyro bias of 4 deg/s 1-sigma (the draw: -4.8 deg/s on the
+    yaw axis, a raw phone gyro's size; comma2k19's is -3.9), simulated once."""
+    from sideslip.simulate import SensorConfig, simulate
+    from sideslip.simulate.scenarios import SCENARIOS
+
+    cfg = SensorConfig().with_overrides(
+        {**SCENARIOS["demo"].sensor_overrides, "gyro_bias_std": math.radians(4.0)}
+    )
+    return simulate("demo", seed=3, config=cfg)
+
+
+def yaw_err_deg(yaw: np.ndarray, drive: Drive) -> np.ndarray:
+    """|yaw - ref_yaw| wrapped, deg, on every row."""
+    return np.degrees(np.abs(np.angle(np.exp(1j * (yaw - drive["ref_yaw"])))))
 
 
 def rms(x: np.ndarray) -> float:

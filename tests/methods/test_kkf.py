@@ -14,7 +14,14 @@ from sideslip.simulate import simulate
 from sideslip.simulate.sensors import SensorConfig
 from sideslip.vehicle import load_vehicle
 from tests.conftest import sim_drive
-from tests.methods.seed001_drives import BLAZER, beta_err_deg, linear_drive, turns
+from tests.methods.seed001_drives import (
+    BLAZER,
+    beta_err_deg,
+    linear_drive,
+    raw_gyro_demo,
+    turns,
+    yaw_err_deg,
+)
 
 
 # ------------------------------------------------------------------------------------------
@@ -81,21 +88,12 @@ def test_kkf_learns_a_raw_phone_gyro_bias_of_several_degrees_per_second() -> Non
     and the heading drifted by 100+ deg.  With the GNSS course rate deciding until the bias
     converges, the KKF learns a 4 deg/s bias on the demo drive; after 30 s its heading error
     stays below 0.5 deg (GNSS course noise ~0.1 deg at 22 m/s plus bias drift)."""
-    import math
-
-    from sideslip.simulate import SensorConfig, simulate
-    from sideslip.simulate.scenarios import SCENARIOS
-
-    cfg = SensorConfig().with_overrides(
-        {**SCENARIOS["demo"].sensor_overrides, "gyro_bias_std": math.radians(4.0)}
-    )
-    drive = simulate("demo", seed=3, config=cfg)
+    drive = raw_gyro_demo()
     true_bias = drive.meta["truth_sensor"]["gyro_bias"][2]
     assert abs(math.degrees(true_bias)) > 1.0  # the draw is a large bias
     est = run_method(all_methods()["kkf"], drive, load_vehicle(drive.meta["vehicle"]))
     late = drive.t > 30.0
-    err = np.angle(np.exp(1j * (est["yaw"][late] - drive["ref_yaw"][late])))
-    assert math.degrees(np.max(np.abs(err))) < 0.5
+    assert np.max(yaw_err_deg(est["yaw"], drive)[late]) < 0.5
     assert abs(math.degrees(est["gyro_bias"][-1] - true_bias)) < 0.05
 
 
@@ -104,20 +102,13 @@ def test_kkf_starts_from_the_drives_gyro_zero() -> None:
     drive's own zero (GNSS course windows and standstill, whole drive), so the heading is right
     from the first straight; from 0 +- SIGMA_BIAS0 it is 7 deg off in the first 10 s while the
     filter learns.  Bound: the first 10 s within 0.5 deg (the late-drive bound above)."""
-    from sideslip.simulate import SensorConfig, simulate
-    from sideslip.simulate.scenarios import SCENARIOS
-
-    cfg = SensorConfig().with_overrides(
-        {**SCENARIOS["demo"].sensor_overrides, "gyro_bias_std": math.radians(4.0)}
-    )
-    drive = simulate("demo", seed=3, config=cfg)
+    drive = raw_gyro_demo()
     vehicle = load_vehicle(drive.meta["vehicle"])
     early = (drive.t < 10.0) & (drive["ref_vx"] > 5.0)
     worst = {}
     for zero in (True, False):
         est = run_method(all_methods()["kkf"], drive, vehicle, KkfSettings(zero_gyro=zero))
-        err = np.angle(np.exp(1j * (est["yaw"] - drive["ref_yaw"])))[early]
-        worst[zero] = math.degrees(np.max(np.abs(err)))
+        worst[zero] = float(np.max(yaw_err_deg(est["yaw"], drive)[early]))
         if zero:
             start = est.params["gyro_bias_start"]
             assert start["gyro_zero_rad_s"] == pytest.approx(est["gyro_bias"][0], abs=1e-6)
