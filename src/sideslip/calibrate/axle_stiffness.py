@@ -293,6 +293,8 @@ def _separation(s: dict[str, FloatArray] | None) -> float:
     cannot be told apart)."""
     if s is None or s["y"].size < 3:
         return 0.0
+    if not (np.std(s["kin"]) > 0.0 and np.std(s["ff"]) > 0.0):
+        return 0.0  # a constant regressor (straight driving): nothing to tell apart
     c = float(np.corrcoef(s["kin"], s["ff"])[0, 1])
     return 1.0 - c * c if np.isfinite(c) else 0.0
 
