@@ -403,7 +403,7 @@ def _rmse_with(name: str, scale: float, settings: dict) -> tuple[float, dict]:
                 strict=True,
                 reason="scoring the variance of the gyro prediction error (robust to a raw "
                 "gyro's bias, comma2k19: 0.58 -> 0.10 deg) picks a looser a_y sigma here: "
-                "auto 0.156 deg against the physics preset's 0.124",
+                "auto 0.161 deg against the paper preset's 0.126 (physics 0.156)",
             ),
         ),
     ],
@@ -414,11 +414,16 @@ def test_auto_sigmas_do_as_well_as_the_better_fixed_preset_on_each_drive(scenari
     # 0.60 deg, paper preset 0.16 deg); on a banked turn the a_y factor is what makes beta
     # immune to the bank, which only the dynamics see (physics 0.06 deg, paper 0.20 deg).
     # Truth: the simulator's Magic Formula tyres, roll and bank (cr_slalom: CommonRoad's
-    # multi-body model).  "auto" picks per drive; 15 % slack over the better preset.
+    # multi-body model).  "auto" picks per drive; 15 % slack over the better preset, and at
+    # least 0.015 deg: below that the presets cannot be ranked, since the drive's own steering
+    # zero (fit error 0.02-0.03 deg rms on seeds 0-2, tests/calibrate/test_steer_zero.py)
+    # moves beta by about that much (banked_turn with the zero: auto 0.022, physics 0.009,
+    # paper 0.175 deg).
     auto, params = _rmse_with(scenario, scale, {})
     physics, _ = _rmse_with(scenario, scale, {"preset": "physics"})
     paper, _ = _rmse_with(scenario, scale, {"preset": "paper"})
-    assert auto <= 1.15 * min(physics, paper), (auto, physics, paper)
+    best = min(physics, paper)
+    assert auto <= max(1.15 * best, best + 0.015), (auto, physics, paper)
     assert "gyro yaw rate predicted" in params["tuning"]["criterion"]
     assert len(params["tuning"]["candidates"]) == 10
 
@@ -590,8 +595,11 @@ def test_auto_sigmas_on_a_real_car_with_a_biased_phone_gyro():
 @pytest.mark.parametrize("method", ["kf_linear", "fg_lag"])
 def test_factor_graph_subtracts_the_drive_zero(method: str) -> None:
     """demo with a 3 deg/s raw bias: with the zero the graph's beta is as on the drive's own gyro
-    (0.005 deg bound: the two zeros differ by the fit's noise); with ``zero_gyro=False`` the
-    yaw-rate factors read the bias as yaw and beta is off (kf_linear 0.069 -> 0.163 deg)."""
+    (0.005 deg bound: the two zeros differ by the fit's noise).  With ``zero_gyro=False`` and
+    the steer as recorded too, the yaw-rate factors read the bias as yaw and beta is off
+    (kf_linear 0.038 -> 0.163, fg_lag 0.037 -> 0.310 deg; bound +0.1).  With the drive's
+    steering zero alone, the auto sigmas lean on the a_y factor (0.2 m/s^2) and the bias
+    costs less (0.038 -> 0.044, 0.037 -> 0.046 deg; bound +0.003, a deterministic drive)."""
     drive = sim_drive("demo")
     vehicle = load_vehicle(drive.meta["vehicle"])
     meth = all_methods()[method]
@@ -599,6 +607,8 @@ def test_factor_graph_subtracts_the_drive_zero(method: str) -> None:
     raw = raw_gyro(drive)
     zeroed = metrics(drive, run_method(meth, raw, vehicle).series)["beta_rmse_deg"]
     as_recorded = run_method(meth, raw, vehicle, FactorGraphSettings(zero_gyro=False))
+    neither = run_method(meth, raw, vehicle, FactorGraphSettings(zero_gyro=False, zero_steer=False))
     assert zeroed == pytest.approx(base, abs=0.005)
-    assert metrics(drive, as_recorded.series)["beta_rmse_deg"] > base + 0.05
+    assert metrics(drive, neither.series)["beta_rmse_deg"] > base + 0.1
+    assert metrics(drive, as_recorded.series)["beta_rmse_deg"] > base + 0.003
     assert "gyro_zero" in as_recorded.params and "off" in str(as_recorded.params["gyro_zero"])

@@ -156,16 +156,31 @@ def test_the_doppler_check_does_not_blame_the_receiver_for_a_bank_ramp():
     assert two_sigma_share(drive, est) >= 0.90
 
 
-@pytest.mark.parametrize("scenario", ["dlc_bank", "banked_turn", "race_lap"])
+@pytest.mark.parametrize("scenario", ["dlc_bank", "race_lap"])
 def test_fused_beats_every_paper_method_on_banks_and_at_the_limit(scenario):
-    """Where bank and tyre saturation defeat the linear models, the fused smoother is the best
-    single method (measured: dlc_bank 0.034 vs 0.110 deg, banked_turn 0.030 vs 0.046, race_lap
-    0.074 vs 0.175)."""
+    """Where bank transients and tyre saturation defeat the linear models, the fused smoother
+    is the best single method (measured: dlc_bank 0.021 vs 0.084 deg, race_lap 0.048 vs
+    0.167)."""
     drive = sim_drive(scenario)
     rmse = beta_rmse_all(drive, load_vehicle(drive.meta["vehicle"]))
     others = {k: val for k, val in rmse.items() if k not in OURS}
     best_other = min(others, key=others.get)
     assert rmse["fused"] < others[best_other], (rmse["fused"], best_other, others[best_other])
+
+
+def test_fused_is_level_with_the_zeroed_linear_graph_on_a_steady_bank():
+    """A steady 25 deg bank (banked_turn) no longer defeats the paper's graph once its steering
+    sensor is zeroed with the drive's own offset (sideslip.calibrate.steer_zero): per seed the
+    two trade places within 0.015 deg (seeds 0-5, deg: fused 0.024 0.015 0.030 0.026 0.015
+    0.012, kf_linear 0.021 0.025 0.025 0.013 0.019 0.024).  Issue 15's target on the mean
+    over the six draws: within 10 % of the best paper method (measured 0.020 vs 0.021)."""
+    total: dict[str, float] = {}
+    for seed in range(6):
+        drive = sim_drive("banked_turn", seed)
+        for name, value in beta_rmse_all(drive, load_vehicle(drive.meta["vehicle"])).items():
+            total[name] = total.get(name, 0.0) + value
+    best_other = min(v for n, v in total.items() if n not in OURS)
+    assert total["fused"] <= 1.10 * best_other, total
 
 
 @pytest.mark.parametrize(

@@ -334,12 +334,22 @@ def test_observer_health_flags_where_the_model_stops_fitting(scenario: str) -> N
     bad, good = mv & (h > 0.3), mv & (h < 0.1)
     assert bad.sum() > 100 and good.sum() > 100
     assert np.mean(err[bad]) > 3.0 * np.mean(err[good])
-    # the simple bicycle observer (yaw-rate output only) is off on the whole banked stretch
-    # (0.3 deg against 0.06 on the flat step steer): its health says so on average
-    h_bank = run_method(all_methods()["obs_bicycle"], drive, VEH)["health"]
+    # the simple bicycle observer sees the road only through its yaw-rate output: a steady
+    # bank that the tyres answer leaves the yaw rate fitting, so its health cannot flag the
+    # whole banked stretch (an earlier pass of "mean health > 0.5 here" came from the
+    # uncorrected 0.1 deg steering offset, which flagged every row of every drive).  What it
+    # must do: the rows it flags (> 0.1) carry larger errors than those it passes (measured
+    # banked_turn 0.50 vs 0.25 deg, dlc_bank 0.57 vs 0.11, i.e. 1.9x and 5x: bound 1.5x), and on
+    # the flat step steer its mean health stays low (measured 0.12; bound 0.2)
+    est_b = run_method(all_methods()["obs_bicycle"], drive, VEH)
+    h_bank = est_b["health"]
+    err_b = np.abs(est_b["beta"] - drive["ref_beta"])
+    flagged, passed = mv & (h_bank > 0.1), mv & (h_bank <= 0.1)
+    assert flagged.sum() > 100 and passed.sum() > 100
+    assert np.mean(err_b[flagged]) > 1.5 * np.mean(err_b[passed])
     step = sim_drive("step_steer")
     h_flat = run_method(all_methods()["obs_bicycle"], step, VEH)["health"]
-    assert np.mean(h_bank[mv]) > 0.5 > 0.2 > np.mean(h_flat[step["ref_vx"] > 5.0])
+    assert np.mean(h_flat[step["ref_vx"] > 5.0]) < 0.2
 
 
 def test_observer_settings_reach_the_method_and_bad_values_say_what_is_expected() -> None:

@@ -92,6 +92,7 @@ from numpy.typing import NDArray
 
 from sideslip.calibrate.result import Fitted
 from sideslip.calibrate.sensors import drive_gyro_bias, gyro_zero_params, subtracted_zero
+from sideslip.calibrate.steer_zero import drive_steer_offset, steer_zero_params, subtracted_offset
 from sideslip.drive import Drive
 from sideslip.estimate import Estimate
 from sideslip.filters.banded import add_chain_factors, fixed_lag_chain, solve_chain
@@ -174,7 +175,9 @@ class GraphInputs:
     (length N - 1); ``wz`` and ``ay`` the raw samples as the drive stores them (float32 in a
     compact drive, float64 otherwise; NaN where the sensor has no fresh sample); ``gyro_zero``
     the drive's gyro zero the yaw-rate factors subtract (None: not asked for,
-    ``FactorGraphSettings.zero_gyro``).
+    ``FactorGraphSettings.zero_gyro``); ``steer_zero`` the drive's steering offset, already
+    subtracted from ``delta`` where significant (None: not asked for,
+    ``FactorGraphSettings.zero_steer``).
     """
 
     t: FloatArray
@@ -186,6 +189,7 @@ class GraphInputs:
     wz: NDArray[np.floating]
     ay: NDArray[np.floating]
     gyro_zero: Fitted | None = None
+    steer_zero: Fitted | None = None
 
     @property
     def wz_zero(self) -> float:
@@ -221,7 +225,10 @@ def graph_inputs(
     # each one into double precision exactly, so no float64 copy of the drive is kept
     wz, ay = (_as_stored_float(drive.data[k]) for k in ("wz", "ay"))
     zero = drive_gyro_bias(drive, vehicle.gnss_xyz) if settings.zero_gyro else None
-    return GraphInputs(t, delta, v_dynamics, v_measurement, gap, low, wz, ay, zero)
+    steer_zero = drive_steer_offset(drive, vehicle, zero) if settings.zero_steer else None
+    if steer_zero is not None:
+        delta = delta - subtracted_offset(steer_zero)
+    return GraphInputs(t, delta, v_dynamics, v_measurement, gap, low, wz, ay, zero, steer_zero)
 
 
 def build_graph(
@@ -502,10 +509,17 @@ def solve_kalman(graph: SideslipGraph) -> tuple[FloatArray, FloatArray, FloatArr
     )  # fmt: skip
 
 
-def _gyro_zero_params(zero: Fitted | None) -> dict[str, object]:
-    if zero is None:
-        return {"gyro_zero": "off (FactorGraphSettings.zero_gyro): the samples as recorded"}
-    return gyro_zero_params(zero)
+def _zero_params(inputs: GraphInputs) -> dict[str, object]:
+    out: dict[str, object] = {}
+    if inputs.gyro_zero is None:
+        out["gyro_zero"] = "off (FactorGraphSettings.zero_gyro): the samples as recorded"
+    else:
+        out.update(gyro_zero_params(inputs.gyro_zero))
+    if inputs.steer_zero is None:
+        out["steer_zero"] = "off (FactorGraphSettings.zero_steer): the steer as recorded"
+    else:
+        out.update(steer_zero_params(inputs.steer_zero))
+    return out
 
 
 def _estimate(
@@ -534,7 +548,7 @@ def _estimate(
         "tuning": prep.tuning.params(),
         "accelerometer": "raw lateral specific force (no roll/bank compensation, as the paper)",
         "low_speed_fraction": float(low_speed.mean()) if low_speed.size else 0.0,
-        **_gyro_zero_params(prep.inputs.gyro_zero),
+        **_zero_params(prep.inputs),
         **extra,
     }
     out: dict[str, FloatArray] = {"beta": x[:, 0].copy(), "r": x[:, 1].copy()}

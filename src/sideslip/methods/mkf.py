@@ -65,6 +65,7 @@ from numpy.typing import NDArray
 from sideslip import gnss
 from sideslip.calibrate.result import Fitted
 from sideslip.calibrate.sensors import drive_gyro_bias, gyro_zero_params
+from sideslip.calibrate.steer_zero import drive_steer_offset, steer_zero_params, subtracted_offset
 from sideslip.drive import Drive
 from sideslip.estimate import Estimate
 from sideslip.filters.excess import excess_innovation_variance
@@ -140,6 +141,10 @@ class MkfSettings:
         its GNSS course windows and standstill over the whole drive,
         :func:`sideslip.calibrate.sensors.drive_gyro_bias`) where the drive tells it, instead
         of 0 +- ``SIGMA_BIAS0`` (1 deg/s; the comma2k19 phone's raw gyro has 3.9).
+    zero_steer : subtract the drive's own steering offset from the steer input (the intercept
+        of calibrate's steering relation alone,
+        :func:`sideslip.calibrate.steer_zero.drive_steer_offset`, where more than 2 sigma from
+        0): the model reads an offset d0 as a front-axle force c_f d0.  False: as recorded.
     """
 
     preset: Literal["auto", "paper", "typical"] = "auto"
@@ -155,6 +160,7 @@ class MkfSettings:
     consistency_window_s: float = 2.0
     thrust_angle_sigma_rad: float = THRUST_ANGLE_SIGMA
     zero_gyro: bool = True
+    zero_steer: bool = True
 
     def __post_init__(self) -> None:
         if self.preset not in ("auto", "paper", "typical"):
@@ -216,7 +222,9 @@ class MkfProblem:
     entry propagating row k-1 to k; ``u`` (N,2) inputs [delta, bank]; ``gyro`` (N) with NaN
     where no sample and ``gyro_var`` its variance; ``course``/``course_var``/``hr`` GNSS
     course; ``zero_rate`` rows at standstill; ``x0``, ``P0`` the prior; ``low`` rows in the
-    low-speed mode; ``gyro_zero`` the drive's zero the bias prior came from (None: not asked).
+    low-speed mode; ``gyro_zero`` the drive's zero the bias prior came from (None: not asked);
+    ``steer_zero`` the drive's steering offset, subtracted from ``u[:, 0]`` where significant
+    (None: not asked).
     """
 
     Ad: FloatArray
@@ -237,6 +245,7 @@ class MkfProblem:
     gyro_sigma_100hz: float = SIGMA_GYRO_100HZ  # rad/s behind gyro_var, and its source
     gyro_sigma_source: str = "typical"
     gyro_zero: Fitted | None = None
+    steer_zero: Fitted | None = None
 
 
 def initial_heading(t: FloatArray, wz: FloatArray, course: FloatArray, drive: Drive | None = None) -> float:
@@ -280,6 +289,7 @@ def mkf_problem(
     steer, _ = hold(drive["steer"], t) if "steer" in drive else (np.zeros_like(t), None)
     u = np.zeros((t.size, 2))  # C-contiguous rows for the numba loop
     u[:, 0] = steer
+    del steer
     if bank is not None:
         u[:, 1] = np.nan_to_num(np.asarray(bank, dtype=float))
     tune_sy, tune_b = st.tuned_groups()
@@ -287,6 +297,9 @@ def mkf_problem(
     cm = gnss.course_at_cg(drive, vehicle, speed, st.v_gate_m_s)
     wz = drive["wz"]
     zero = drive_gyro_bias(drive, vehicle.gnss_xyz) if st.zero_gyro else None
+    steer_zero = drive_steer_offset(drive, vehicle, zero) if st.zero_steer and "steer" in drive else None
+    if steer_zero is not None:
+        u[:, 0] -= subtracted_offset(steer_zero)
     bias0, sigma_bias0 = (zero.value, zero.sigma) if zero and zero.informed else (0.0, SIGMA_BIAS0)
     x0 = np.array([0.0, 0.0, initial_heading(t, wz - bias0 if bias0 else wz, cm.course, drive), bias0])
     P0 = np.diag([SIGMA_BETA0, SIGMA_R0, SIGMA_PSI0, sigma_bias0]) ** 2
@@ -295,6 +308,7 @@ def mkf_problem(
         tab.Ad, tab.Bd, tab.Qd, tab.idx, u, wz, sample_variance(t, g_sigma), cm.course,
         cm.sigma**2, cm.hr, np.abs(speed) < STANDSTILL_SPEED, x0, P0, tab.low,
         gyro_sigma_100hz=g_sigma, gyro_sigma_source=g_source, gyro_zero=zero,
+        steer_zero=steer_zero,
     )  # fmt: skip
     if not (tune_sy or tune_b):
         return prob
@@ -479,6 +493,8 @@ def mkf_estimate(
         problem_params["gyro_bias_start"] = {
             **gyro_zero_params(prob.gyro_zero, subtracted=False),
             "else": "0 +- SIGMA_BIAS0 (the drive does not tell it)"}
+    if prob.steer_zero is not None:
+        problem_params.update(steer_zero_params(prob.steer_zero))
     noise_params = _process_noise_params(settings, prob)
     g_sigma, g_source = prob.gyro_sigma_100hz, prob.gyro_sigma_source
     del prob

@@ -94,7 +94,10 @@ finite on every row.  The gyro is zeroed at standstill (see
 :func:`sideslip.methods.roll_index.standstill_gyro_bias`) and, before the first standstill, by
 the drive's own zero from its GNSS course (:func:`sideslip.calibrate.sensors.drive_gyro_bias`:
 a raw phone gyro's 3.9 deg/s put obs_kinematic 24.9 deg off on the comma2k19 minute, 0.21
-with the zero; realdata_check.md); the accelerometer is assumed zeroed
+with the zero; realdata_check.md).  The steering sensor is zeroed with the drive's own
+offset (:func:`sideslip.calibrate.steer_zero.drive_steer_offset`, where more than 2 sigma from
+0): the observers read an offset d0 as a front-axle force c_f d0, i.e. as sideslip on every
+row.  The accelerometer is assumed zeroed
 (the paper's assumption) and the IMU at the CG (lever arms are ignored).
 Reversing follows the contract's beta = atan2(v_y, v_x) (about +-pi, as the reference
 ``ref_beta`` of the simulator and of the converters), not a forward-equivalent small angle.
@@ -420,12 +423,14 @@ class BicycleObserverSettings:
     speed, a_y), and no fixed choice beats -20 on both files for both observers (mean beta
     RMSE obs_bicycle 0.327 / 0.234 / 0.324 deg, obs_modified 0.167 / 0.139 / 0.132 deg).
     ``zero_gyro``: before the standstill zeroing starts, subtract the drive's own gyro zero
-    (module docstring); False keeps the samples as recorded until then.
+    (module docstring); False keeps the samples as recorded until then.  ``zero_steer``:
+    subtract the drive's own steering offset (module docstring); False: the steer as recorded.
     """
 
     pole_rad_s: float = P_BICYCLE
     v_gate_m_s: float = V_GATE
     zero_gyro: bool = True
+    zero_steer: bool = True
 
     def __post_init__(self) -> None:
         name = type(self).__name__
@@ -441,13 +446,15 @@ class KinematicObserverSettings:
     """Tuning of ``obs_kinematic``: ``alpha`` (-, poles at -alpha |r|, > 1 so K2 keeps the sign
     of r), ``r_observable_rad_s`` (yaw rate below which v_y is taken as weakly observable),
     ``tau_straight_s`` (pull of v_y to 0 when straight), ``v_gate_m_s`` (speed gate).  Fixed,
-    for the reason given in :class:`BicycleObserverSettings`.  ``zero_gyro`` as there."""
+    for the reason given in :class:`BicycleObserverSettings`.  ``zero_gyro`` and
+    ``zero_steer`` as there (the steer enters through the roll index and the start value)."""
 
     alpha: float = ALPHA
     r_observable_rad_s: float = R_OBSERVABLE
     tau_straight_s: float = TAU_STRAIGHT
     v_gate_m_s: float = V_GATE
     zero_gyro: bool = True
+    zero_steer: bool = True
 
     def __post_init__(self) -> None:
         name = type(self).__name__
@@ -492,7 +499,8 @@ def obs_bicycle(drive: Drive, vehicle: Vehicle,
                 settings: BicycleObserverSettings | None = None) -> Estimate:
     """Sideslip from the single-track model corrected by the gyro (module docstring)."""
     st = settings or BicycleObserverSettings()
-    inp = sensor_inputs(drive, vehicle.gnss_xyz if st.zero_gyro else None)
+    inp = sensor_inputs(drive, vehicle.gnss_xyz if st.zero_gyro else None,
+                        vehicle if st.zero_steer else None)
     fresh = _fresh(drive, "wz")
     beta, r_hat = run_bicycle_observer(inp, vehicle, fresh, st.pole_rad_s, st.v_gate_m_s)
     health, summary = observer_health(
@@ -516,7 +524,8 @@ def obs_kinematic(drive: Drive, vehicle: Vehicle,
                   settings: KinematicObserverSettings | None = None) -> Estimate:
     """Kinematic observer with the roll-compensated lateral acceleration (module docstring)."""
     st = settings or KinematicObserverSettings()
-    inp = sensor_inputs(drive, vehicle.gnss_xyz if st.zero_gyro else None)
+    inp = sensor_inputs(drive, vehicle.gnss_xyz if st.zero_gyro else None,
+                        vehicle if st.zero_steer else None)
     roll = estimate_roll_index(inp, vehicle)
     ay = compensate_ay(inp.ay_m, roll.roll)
     beta, vx, vy = run_kinematic_observer(inp, vehicle, ay, st.alpha, st.v_gate_m_s,
@@ -540,7 +549,8 @@ def obs_kinematic(drive: Drive, vehicle: Vehicle,
 
 def _modified(drive: Drive, vehicle: Vehicle, st: BicycleObserverSettings, compensate: bool
               ) -> tuple[dict[str, FloatArray], dict[str, object]]:
-    inp = sensor_inputs(drive, vehicle.gnss_xyz if st.zero_gyro else None)
+    inp = sensor_inputs(drive, vehicle.gnss_xyz if st.zero_gyro else None,
+                        vehicle if st.zero_steer else None)
     fresh = _fresh(drive, "wz", "ay")
     series: dict[str, FloatArray] = {}
     extra: dict[str, object] = {}

@@ -73,6 +73,7 @@ from scipy.signal import butter, sosfilt, sosfilt_zi
 
 from sideslip.calibrate.result import Fitted
 from sideslip.calibrate.sensors import drive_gyro_bias, gyro_zero_params, subtracted_zero
+from sideslip.calibrate.steer_zero import drive_steer_offset, steer_zero_params, subtracted_offset
 from sideslip.drive import Drive
 from sideslip.estimate import Estimate
 from sideslip.methods.observer_health import stale_health
@@ -126,11 +127,14 @@ class RollSettings:
     """Tuning of ``roll_index`` and ``roll_dfc``: ``roll_cutoff_hz`` (Hz, low-pass of the roll
     channels), ``identify_roll_gradient`` (use the drive's suspension roll gradient where it
     contradicts the file, :mod:`sideslip.methods.roll_gradient`), ``zero_gyro`` (subtract the
-    drive's own gyro zero before the standstill zeroing starts, :func:`sensor_inputs`)."""
+    drive's own gyro zero before the standstill zeroing starts, :func:`sensor_inputs`),
+    ``zero_steer`` (subtract the drive's own steering offset, :func:`sensor_inputs`; the
+    straight-and-flat test |delta| < 0.5 deg and the yaw/steer roll read the steer)."""
 
     roll_cutoff_hz: float = ROLL_CUTOFF_HZ
     identify_roll_gradient: bool = True
     zero_gyro: bool = True
+    zero_steer: bool = True
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.roll_cutoff_hz) and 0.05 <= self.roll_cutoff_hz <= 20.0):
@@ -148,7 +152,8 @@ class Inputs:
     ``gyro_zero`` where it has one, else 0); ax: longitudinal specific force (zeros when the
     drive has no ``ax``); speed_fresh: rows with a new speed sample; speed_dt: time since the
     previous speed sample at those rows (s); gyro_zero: the drive's zero that was asked for
-    (None when not).
+    (None when not); steer_zero: the drive's steering offset that was asked for (None when
+    not), subtracted from ``delta`` where significant.
     """
 
     t: FloatArray
@@ -161,13 +166,18 @@ class Inputs:
     speed_fresh: BoolArray
     speed_dt: FloatArray
     gyro_zero: Fitted | None = None
+    steer_zero: Fitted | None = None
 
     def gyro_zero_params(self) -> dict[str, object]:
-        """The drive's gyro zero for a method's params (empty when it was not asked for)."""
-        if self.gyro_zero is None:
-            return {}
-        return {**gyro_zero_params(self.gyro_zero),
-                "gyro_zero_use": "the rows before STANDSTILL_MIN_S of standstill"}
+        """The drive's gyro zero and steering offset for a method's params (empty where they
+        were not asked for)."""
+        out: dict[str, object] = {}
+        if self.gyro_zero is not None:
+            out.update(gyro_zero_params(self.gyro_zero),
+                       gyro_zero_use="the rows before STANDSTILL_MIN_S of standstill")
+        if self.steer_zero is not None:
+            out.update(steer_zero_params(self.steer_zero))
+        return out
 
 
 @numba.njit(cache=True)
@@ -242,8 +252,9 @@ def _sample_steps(t: FloatArray, fresh: BoolArray, first_dt: float
     return out
 
 
-def sensor_inputs(drive: Drive, gnss_lever: tuple[float, float, float] | None = None) -> Inputs:
-    """Hold the sensors onto every row; zero the gyro; see :class:`Inputs`.
+def sensor_inputs(drive: Drive, gnss_lever: tuple[float, float, float] | None = None,
+                  steer_vehicle: Vehicle | None = None) -> Inputs:
+    """Hold the sensors onto every row; zero the gyro and the steering; see :class:`Inputs`.
 
     The gyro is zeroed at standstill (:func:`standstill_gyro_bias`, causal); on the rows
     before ``STANDSTILL_MIN_S`` of standstill, with the drive's own zero (the bias of its GNSS
@@ -252,7 +263,10 @@ def sensor_inputs(drive: Drive, gnss_lever: tuple[float, float, float] | None = 
     (the antenna lever arm, m) is given and the zero is more than 2 sigma from 0
     (:func:`sideslip.calibrate.sensors.subtracted_zero`), else 0.  The standstill rows
     are those of :func:`sideslip.signals.standstill`, computed from the held speed ``vx`` (the
-    same hold of the same samples) rather than a second pass."""
+    same hold of the same samples) rather than a second pass.  With ``steer_vehicle`` (the
+    vehicle file) the drive's own steering offset
+    (:func:`sideslip.calibrate.steer_zero.drive_steer_offset`) is subtracted from the steer
+    where it is more than 2 sigma from 0 (:func:`sideslip.calibrate.steer_zero.subtracted_offset`)."""
     t = drive.t
     raw_speed = speed_raw(drive)
     if raw_speed is None:
@@ -267,17 +281,23 @@ def sensor_inputs(drive: Drive, gnss_lever: tuple[float, float, float] | None = 
     wz = drive["wz"] if "wz" in drive else np.zeros_like(t)
     zero = drive_gyro_bias(drive, gnss_lever) if gnss_lever is not None and "wz" in drive else None
     bias = standstill_gyro_bias(t, wz, still, subtracted_zero(zero) if zero is not None else 0.0)
+    delta = _held(drive, "steer")
+    steer_zero = None
+    if steer_vehicle is not None and "steer" in drive:
+        steer_zero = drive_steer_offset(drive, steer_vehicle, zero)
+        delta = delta - subtracted_offset(steer_zero)
     return Inputs(
         t=t,
         ay_m=_held(drive, "ay"),
         ax=_held(drive, "ax"),
         r=np.asarray(hold_first(wz)) - bias,
         vx=vx,
-        delta=_held(drive, "steer"),
+        delta=delta,
         gyro_bias=bias,
         speed_fresh=fresh,
         speed_dt=speed_dt,
         gyro_zero=zero,
+        steer_zero=steer_zero,
     )
 
 
@@ -550,7 +570,8 @@ def roll_index(drive: Drive, vehicle: Vehicle, settings: RollSettings | None = N
                ) -> Estimate:
     """Total roll and road bank by the roll index (see module docstring)."""
     st = settings or RollSettings()
-    inp = sensor_inputs(drive, vehicle.gnss_xyz if st.zero_gyro else None)
+    inp = sensor_inputs(drive, vehicle.gnss_xyz if st.zero_gyro else None,
+                        vehicle if st.zero_steer else None)
     est = estimate_roll_index(inp, vehicle, st.identify_roll_gradient, st.roll_cutoff_hz)
     health, summary = roll_index_health(inp, est, _imu_fresh(drive))
     return Estimate(
@@ -590,7 +611,8 @@ def roll_dfc(drive: Drive, vehicle: Vehicle, settings: RollSettings | None = Non
     ``identify_roll_gradient`` of the settings does not apply (eq 58's roll does not use it).
     """
     st = settings or RollSettings()
-    inp = sensor_inputs(drive, vehicle.gnss_xyz if st.zero_gyro else None)
+    inp = sensor_inputs(drive, vehicle.gnss_xyz if st.zero_gyro else None,
+                        vehicle if st.zero_steer else None)
     roll, bank, w = estimate_roll_dfc(inp, vehicle, st.roll_cutoff_hz)
     health = np.where(np.abs(inp.vx) >= V_MIN, 1.0 - w, 0.0)
     health = np.maximum(health, stale_health(inp.t, _imu_fresh(drive)))
