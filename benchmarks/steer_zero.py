@@ -12,6 +12,7 @@ Writes benchmarks/results/steer_zero.md.
     off, seed 0, right file and one 30 % soft in cornering stiffness; roll RMSE (deg) of the
     roll estimators; and the real drives in ../shared/data (Revs lap; comma2k19 minute against
     comma's pose), where present.
+(c) cost: each of these methods with the zero off and on, on urban_highway.
 """
 
 from __future__ import annotations
@@ -140,12 +141,38 @@ def effect_tables() -> list[str]:
     return out
 
 
+def speed_table() -> list[str]:
+    """Seconds per run (best of 3 after a warm-up) with the zero off and on, urban_highway."""
+    drive, vehicle = load_scenario("urban_highway", 0)
+    n = len(drive)  # type: ignore[arg-type]
+    lines = [
+        "## (c) Cost",
+        "",
+        f"urban_highway seed 0 ({n:,} rows, 670 s at 100 Hz); best of 3 runs after a warm-up, one process.",
+        "",
+        "| method | zero off (s) | zero on (s) | samples/s off | samples/s on |",
+        "|---|---:|---:|---:|---:|",
+    ]
+    for m in (*BETA_METHODS, *ROLL_METHODS):
+        best = {}
+        for on in (False, True):
+            run_method(m, drive, vehicle, {"zero_steer": on})  # type: ignore[arg-type]
+            times = []
+            for _ in range(3):
+                start = time.perf_counter()
+                run_method(m, drive, vehicle, {"zero_steer": on})  # type: ignore[arg-type]
+                times.append(time.perf_counter() - start)
+            best[on] = min(times)
+        lines.append(f"| {m} | {best[False]:.3f} | {best[True]:.3f} | {n / best[False]:,.0f} | {n / best[True]:,.0f} |")
+    return [*lines, ""]
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--seeds", type=int, default=3)
     args = parser.parse_args()
     start = time.perf_counter()
-    body = [*offset_table(args.seeds), "## (b) Effect on the methods, seed 0", "", *effect_tables()]
+    body = [*offset_table(args.seeds), "## (b) Effect on the methods, seed 0", "", *effect_tables(), *speed_table()]
     stamp = dt.datetime.now(dt.UTC).strftime("%Y-%m-%d %H:%M UTC")
     head = [
         "# The drive's own steering zero",
