@@ -121,12 +121,15 @@ def steer_signals(drive: Drive, gyro_zero: float) -> SteerSignals:
     )
 
 
-def drive_steer_offset(drive: Drive, vehicle: Vehicle, gyro_zero: Fitted | None = None) -> Fitted:
+def drive_steer_offset(
+    drive: Drive, vehicle: Vehicle, gyro_zero: Fitted | None = None, signals: SteerSignals | None = None
+) -> Fitted:
     """The drive's own steering offset ``delta_0`` (rad, measured minus true road-wheel angle)
     from the steering relation alone (see the module docstring); ``gyro_zero``: the drive's
     gyro zero if the caller has it (else :func:`~sideslip.calibrate.sensors.drive_gyro_bias`
-    is run).  Not informed (the value 0) without a steer column, the mass and axle positions
-    in the file, or 5 s of rows in the linear range faster than 3 m/s."""
+    is run); ``signals``: :func:`steer_signals` with that zero, if the caller has them.  Not
+    informed (the value 0) without a steer column, the mass and axle positions in the file, or
+    5 s of rows in the linear range faster than 3 m/s."""
     name = "steer_offset_rad"
     if "steer" not in drive or "wz" not in drive:
         return left_alone(name, 0.0, "rad", "no steer or yaw-rate column")
@@ -134,7 +137,7 @@ def drive_steer_offset(drive: Drive, vehicle: Vehicle, gyro_zero: Fitted | None 
         return left_alone(name, 0.0, "rad", "the vehicle file lacks mass or axle positions")
     if gyro_zero is None:
         gyro_zero = drive_gyro_bias(drive, vehicle.gnss_xyz)
-    sig = steer_signals(drive, subtracted_zero(gyro_zero))
+    sig = signals if signals is not None else steer_signals(drive, subtracted_zero(gyro_zero))
     k_file = file_roll_gradient(vehicle)
     k_roll = k_file if math.isfinite(k_file) else 0.0
     k_sd = ROLL_FILE_REL * k_roll if math.isfinite(k_file) else ROLL_UNKNOWN_SIGMA
@@ -171,9 +174,13 @@ def steer_zero_params(offset: Fitted) -> dict[str, object]:
     """A method's params entries for the drive's steering offset (:func:`drive_steer_offset`)."""
     if not offset.informed:
         return {"steer_offset_rad": 0.0, "steer_offset_note": f"not told by the drive: {offset.note}"}
-    out: dict[str, object] = {"steer_offset_rad": offset.value, "steer_offset_rad_sigma": offset.sigma,
-                              "steer_offset_source": offset.source}
+    out: dict[str, object] = {
+        "steer_offset_rad": offset.value,
+        "steer_offset_rad_sigma": offset.sigma,
+        "steer_offset_source": offset.source,
+    }
     if subtracted_offset(offset) == 0.0:
-        out["steer_offset_note"] = (f"within {ZERO_SIGNIFICANCE:g} sigma of 0: not subtracted, the "
-                                    "samples as recorded")
+        out["steer_offset_note"] = (
+            f"within {ZERO_SIGNIFICANCE:g} sigma of 0: not subtracted, the samples as recorded"
+        )
     return out

@@ -117,6 +117,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sideslip import doppler_latency_lateral, gnss, gnss_latency
+from sideslip.calibrate.friction import drive_friction
 from sideslip.drive import LONG_DRIVE_ROWS, Drive
 from sideslip.estimate import Estimate
 from sideslip.filters.consistency import nis_consistency
@@ -502,7 +503,7 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
         # c_y a random walk (the roll gyro's bias would need the whole drive)
         nz = dataclasses.replace(
             nz, identify_roll_gradient=False, identify_doppler_latency=False,
-            identify_accel_vrw=False, roll_gyro_bank_with_doppler=False,
+            identify_accel_vrw=False, roll_gyro_bank_with_doppler=False, identify_mu=False,
         )  # fmt: skip
     t = drive.t
     n = len(drive)
@@ -533,6 +534,7 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     if nz.identify_roll_gradient:
         k_phi, roll_params = _drive_roll_gain(drive, vehicle, k_phi, wx, ay)
     geom, iz_m, notes = axle_geometry(vehicle)
+    mu_fit = drive_friction(drive, vehicle, k_phi, nz.axle_curve_shape) if nz.identify_mu else None
     axle = np.append(geom, nz.axle_curve_shape)  # the engine's axle vector (A_SHAPE last)
     # axle forces per mass from the force and moment balance (seed 003 eqs 1-2)
     # the causal filter keeps its floor (a time constant from the whole drive's noise would
@@ -645,6 +647,17 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
         tau_sigma = latency.posterior_sigma(nz.latency_prior_sigma_s)
     g_age = tn[g_node] - t[g_rows] + tau_fix
     x0, P0 = _initial_state(drive, vw, nx, nz)
+    if mu_fit is not None and mu_fit.informed:
+        # the drive's own friction (sideslip.calibrate.friction) as mu's prior
+        # as the prior's mean; its width stays the settings' (FusedSettings.identify_mu)
+        x0[IMU] = mu_fit.value
+        notes["mu_prior"] = (
+            f"{mu_fit.value:.2f} (fit +- {mu_fit.sigma:.2f}) +- {nz.mu_prior_sigma:g} from the drive's "
+            f"{mu_fit.source}"
+        )
+    else:
+        why = "FusedSettings.identify_mu is off" if mu_fit is None else mu_fit.note
+        notes["mu_prior"] = f"{nz.mu_prior:g} +- {nz.mu_prior_sigma:g} (settings): {why}"
     q = _process_psd(nx, nz)
     if not (has_pos or has_vel):
         # the gyro's scale factor is identified against a heading reference, the GNSS course

@@ -56,6 +56,17 @@ class FusedSettings:
     stiffness_prior_check: bool = True
     mu_prior: float = 1.0  # dry asphalt
     mu_prior_sigma: float = 0.35
+    # mu's prior mean from the drive's own understeer angle where the drive used at least 90 %
+    # of it (sideslip.calibrate.friction; read from the whole drive, for the causal filter
+    # too, as a calibration); its width stays mu_prior_sigma: the fit's mu is the one the
+    # file's rear stiffness needs, and with a file 30 % off the state must keep room to trade
+    # (the fit's own 1-sigma, 0.01-0.03 at the limit, as the width: fused_filter on
+    # cr_limit_ramp seed 11 with a soft file and a 5 s multipath burst 2.78 deg with 64 %
+    # inside 2 sigma; with 0.35, 1.82 / 94 %).  Near the limit the axle curve's slip follows
+    # mu: mu_prior 1.0 on a 0.6 road kept the rear axle's slip half the truth (cr_limit_ramp,
+    # CommonRoad BMW on mu 0.6, right file, no GNSS: beta RMSE 0.31 -> 0.07 deg;
+    # benchmarks/results/friction.md)
+    identify_mu: bool = True
     mu_psd: float = 0.02  # 1/sqrt(s): patches of another surface
     latency_prior_sigma_s: float = 0.1  # s: receivers stamp fixes 0-200 ms late
     latency_psd: float = 1e-5  # s/sqrt(s)
@@ -306,9 +317,7 @@ class FusedSettings:
                 expected = ">= 0" if zero_ok else "> 0"
                 raise ValueError(f"FusedSettings.{f.name} = {value!r}: expected a finite number {expected}")
         if self.offset_level_share > 1.0:
-            raise ValueError(
-                f"FusedSettings.offset_level_share = {self.offset_level_share!r}: expected <= 1"
-            )
+            raise ValueError(f"FusedSettings.offset_level_share = {self.offset_level_share!r}: expected <= 1")
         if self.adapt_max < 1.0:
             raise ValueError(f"FusedSettings.adapt_max = {self.adapt_max!r}: expected >= 1")
         if self.accel_vrw_min_factor > 1.0:
@@ -321,7 +330,6 @@ class FusedSettings:
             raise ValueError(
                 f"FusedSettings.accel_vrw_max_factor = {self.accel_vrw_max_factor!r}: expected >= 1"
             )
-
 
 
 def accel_noise_sigma(ay: FloatArray) -> float:
