@@ -1,6 +1,6 @@
 """The drive's own road friction (``sideslip.calibrate.friction``): where the drive decides it,
-how close it comes to the truth's, and what ``fused`` gains from it as mu's prior
-(``FusedSettings.identify_mu``, on by default, against off: mu_prior 1.0 +- 0.35).
+how close it comes to the truth's, and what ``fused`` does with it as mu's prior
+(``FusedSettings.identify_mu`` on, against off, the default: mu_prior 1.0 +- 0.35).
 
 Run: .venv/bin/python benchmarks/friction.py [--seeds 3]
 Writes benchmarks/results/friction.md.
@@ -15,6 +15,10 @@ Writes benchmarks/results/friction.md.
     on every scenario where the fit was informed with some file (elsewhere fused's input is
     the same by construction), and the Revs lap.
 (c) cost of the fit per drive and fused's run time with it off and on.
+(d) fused_filter as (b) with identify_mu and identify_mu_causal off (the default) and on.
+(e) the CommonRoad limit ramp and slalom on the Ford Escort (front-heavy; the car of
+    unseen_vehicle.py, seed 7, which no default was measured on): fused off / on, and on the
+    plateau (|a_y| at 90 % of its largest or more) the mean beta of the truth and of both.
 """
 
 from __future__ import annotations
@@ -46,6 +50,7 @@ FILE_TITLES = {
     "rough": "compare_methods' rough file",
 }
 MODES = ("doppler", "positions", "none")
+PLATEAU_SHARE = 0.9  # the plateau: rows at 90 % of the drive's largest reference |a_y| or more
 
 
 def make_file(key: str, right: Any) -> Any:
@@ -101,8 +106,16 @@ def fit_table(seeds: int) -> tuple[list[str], set[str], list[float]]:
     return [*lines, ""], informed, cost
 
 
-def effect_tables(names: list[str]) -> list[str]:
-    out = ["## (b) fused's beta RMSE (deg) with identify_mu off -> on, mean of seeds 0-1", ""]
+def effect_tables(names: list[str], method: str = "fused") -> list[str]:
+    # fused: identify_mu; fused_filter: identify_mu with identify_mu_causal (both off by default)
+    on_settings = (
+        {"identify_mu": True} if method == "fused" else {"identify_mu": True, "identify_mu_causal": True}
+    )
+    part = "(b)" if method == "fused" else "(d)"
+    out = [
+        f"## {part} {method}'s beta RMSE (deg) with {', '.join(on_settings)} off -> on, mean of seeds 0-1",
+        "",
+    ]
     for mode in MODES:
         out += [
             f"### GNSS: {mode}",
@@ -119,14 +132,14 @@ def effect_tables(names: list[str]) -> list[str]:
                     drive, right = drive_for(name, seed, mode)
                     vehicle = make_file(key, right)
                     for j, on in enumerate((False, True)):
-                        est = run_method("fused", drive, vehicle, {"identify_mu": on})
+                        est = run_method(method, drive, vehicle, on_settings if on else None)
                         pair[j] += metrics(drive, est.series)["beta_rmse_deg"] / 2
                 sums[key] += pair
                 cells.append(f"{pair[0]:.3f} -> {pair[1]:.3f}")
             out.append(f"| {name} | " + " | ".join(cells) + " |")
         means = [f"{sums[k][0] / len(names):.3f} -> {sums[k][1] / len(names):.3f}" for k in FILE_KEYS]
         out += ["| mean | " + " | ".join(means) + " |", ""]
-    if REVS_LAP.is_dir():
+    if REVS_LAP.is_dir() and method == "fused":
         drive, vehicle = load_scenario("revs_lap", 0)
         vals = []
         for on in (False, True):
@@ -165,6 +178,40 @@ def speed_table(fit_cost: list[float]) -> list[str]:
     ]
 
 
+def unseen_table() -> list[str]:
+    from unseen_vehicle import RECEIVERS, _drive
+
+    from sideslip.vehicle import load_vehicle
+
+    base = load_vehicle("commonroad_ford_escort")
+    out = [
+        "## (e) The unseen Ford Escort (unseen_vehicle.py, seed 7): fused off -> on",
+        "",
+        "| manoeuvre | receiver | file | fitted mu | beta RMSE off -> on | plateau beta (deg): truth / off / on |",
+        "|---|---|---|---:|---:|---:|",
+    ]
+    for name in ("cr_limit_ramp", "cr_limit_slalom"):
+        for receiver in RECEIVERS:
+            drive = _drive(name, "ford_escort", 7, receiver)
+            for key in ("right", "rough"):
+                vehicle = make_file(key, base)
+                fit = drive_friction(drive, vehicle, roll_gain(vehicle))  # type: ignore[arg-type]
+                ests = [run_method("fused", drive, vehicle, {"identify_mu": on}) for on in (False, True)]  # type: ignore[arg-type]
+                rmse = [metrics(drive, e.series)["beta_rmse_deg"] for e in ests]  # type: ignore[arg-type]
+                ay_ref = np.abs(drive["ref_ay"])  # type: ignore[index]
+                plateau = ay_ref >= PLATEAU_SHARE * float(np.nanmax(ay_ref))
+                means = [
+                    np.degrees(np.mean(b[plateau]))
+                    for b in (drive["ref_beta"], ests[0]["beta"], ests[1]["beta"])
+                ]  # type: ignore[index]
+                mu = f"{fit.value:.2f}" if fit.informed else "–"
+                plat = " / ".join(f"{m:+.2f}" for m in means)
+                out.append(
+                    f"| {name} | {receiver} | {key} | {mu} | {rmse[0]:.3f} -> {rmse[1]:.3f} | {plat} |"
+                )
+    return [*out, ""]
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--seeds", type=int, default=3)
@@ -172,7 +219,13 @@ def main() -> None:
     start = time.perf_counter()
     fits, informed, cost = fit_table(args.seeds)
     names = [n for n in SCENARIOS if n in informed]
-    body = [*fits, *effect_tables(names), *speed_table(cost)]
+    causal = [
+        *effect_tables(names, "fused_filter"),
+        "The causal filter learns the stiffness only in quasi-steady cornering, so a right mu "
+        "exposes a wrong file's stiffness there.",
+        "",
+    ]
+    body = [*fits, *effect_tables(names), *speed_table(cost), *causal, *unseen_table()]
     stamp = dt.datetime.now(dt.UTC).strftime("%Y-%m-%d %H:%M UTC")
     head = [
         "# The drive's own road friction",
@@ -181,7 +234,7 @@ def main() -> None:
         "`sideslip.calibrate.friction.drive_friction` fits mu to the drive's understeer angle "
         "(steer - L r / v against the brush curves' front minus rear slip), with a steering offset "
         "and the front stiffness scale as nuisance, where the drive used at least 90 % of the fitted "
-        "mu; `fused` takes it as mu's prior (`identify_mu`, on by default).",
+        "mu; with `identify_mu` (off by default: (e)) `fused` takes it as mu's prior mean.",
         "",
     ]
     OUT.write_text("\n".join(head + body))

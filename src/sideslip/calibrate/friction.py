@@ -30,9 +30,11 @@ percentile of ``|f_y| / g``): below the limit a wrong stiffness in the file bend
 relation as a lower ``mu`` does (load transfer, roll steer and compliance add their own
 errors), and a drive that never went near its limit says nothing about it.
 
-Measured (seed 0, the comparison's scenarios; see ``benchmarks/results/friction.md``): the
-CommonRoad BMW on mu 0.6 gives 0.56 on its limit ramp and slalom (the multi-body tyres' axle
-peak), the simulated race lap on mu 1.05 gives 0.96; gentle drives are left alone.
+Measured (the comparison's scenarios, seeds 0-2, ``benchmarks/results/friction.md``): the
+CommonRoad BMW on mu 0.6 gives 0.55-0.57 on its limit ramp and slalom with the right file
+(the multi-body tyres' axle peak under load transfer), 0.55-0.60 with files 30 % soft or
+stiff; the simulated race lap on mu 1.05 gives 0.97-0.99; the other drives, which stay below
+their limit, are left alone.
 """
 
 from __future__ import annotations
@@ -54,10 +56,12 @@ MU_MAX = 1.6  # the grid's top: dry asphalt with road tyres is 0.9-1.2, racing s
 MU_STEP = 0.01
 COARSE_STEP = 0.05
 # the drive must have used this share of the fitted mu to inform it: at the limit the
-# understeer angle grows by several times the linear model's error; at 70 % a file 30 % stiff
-# bent the same way (suburban_outages, 0.33 g on mu 0.9: fitted 0.46 +- 0.04, and fused without
-# GNSS 0.03 -> 1.87 deg; benchmarks/results/friction.md); the limit drives of the comparison
-# used 92-110 % of their fitted mu, the false fits 67-79 %
+# understeer angle grows by several times the linear model's error; below it a file 30 % stiff
+# bends the relation as a lower mu does (suburban_outages, 0.33 g on mu 0.9, 72 % of a fitted
+# 0.46 +- 0.04: fused without GNSS 0.03 -> 1.87 deg).  Measured with 70 %: the limit drives of
+# the comparison and the Revs lap used 92-100 % of their fitted mu; the fits at 67-79 % were
+# right or far off (slalom_low_mu, stiff file, 0.24 on 0.25; dlc_bank, rough file, 0.57 on
+# 0.85; benchmarks/results/friction.md)
 USE_MIN = 0.9
 MIN_SPEED_MPS = 5.0  # below it L r / v is a difference of large terms
 MAX_LONG_ACCEL = 2.0  # m/s^2: harder braking or traction shares the friction (combined slip)

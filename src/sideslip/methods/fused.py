@@ -29,8 +29,11 @@ seed 001), in the smoother the wheel-speed scale too (identified against the GNS
 Measurements (:mod:`sideslip.models.fused_measurements`): wheel speed ``s_w v_x``;
 standstill (v = 0, r = 0); the rear and front axle force relations of the brush tyre model
 (Fiala 1954 / Pacejka 2012 sec. 3.2, :mod:`sideslip.models.axle_force`) with the effective
-stiffness and mu as slowly varying states, the axle forces measured by the accelerometer and
-the yaw acceleration through the single-track force/moment balance (seed 003 eqs 1-2); GNSS
+stiffness and mu as slowly varying states (with ``identify_mu``, mu's prior mean from the
+drive's own understeer angle where the drive reached its limit,
+:mod:`sideslip.calibrate.friction`), the axle forces
+measured by the accelerometer and the yaw acceleration through the single-track force/moment
+balance (seed 003 eqs 1-2); GNSS
 Doppler at the antenna (omega x lever), each epoch at its stamp less the Doppler latency
 where the drive decides it (``_doppler_latency``); GNSS positions at the antenna with
 Gauss-Markov error, the fix's age and the receiver latency.  Below ``axle_min_speed`` and in
@@ -503,7 +506,7 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
         # c_y a random walk (the roll gyro's bias would need the whole drive)
         nz = dataclasses.replace(
             nz, identify_roll_gradient=False, identify_doppler_latency=False,
-            identify_accel_vrw=False, roll_gyro_bank_with_doppler=False, identify_mu=False,
+            identify_accel_vrw=False, roll_gyro_bank_with_doppler=False, identify_mu_causal=False,
         )  # fmt: skip
     t = drive.t
     n = len(drive)
@@ -534,7 +537,8 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     if nz.identify_roll_gradient:
         k_phi, roll_params = _drive_roll_gain(drive, vehicle, k_phi, wx, ay)
     geom, iz_m, notes = axle_geometry(vehicle)
-    mu_fit = drive_friction(drive, vehicle, k_phi, nz.axle_curve_shape) if nz.identify_mu else None
+    use_mu_fit = nz.identify_mu and (smooth or nz.identify_mu_causal)
+    mu_fit = drive_friction(drive, vehicle, k_phi, nz.axle_curve_shape) if use_mu_fit else None
     axle = np.append(geom, nz.axle_curve_shape)  # the engine's axle vector (A_SHAPE last)
     # axle forces per mass from the force and moment balance (seed 003 eqs 1-2)
     # the causal filter keeps its floor (a time constant from the whole drive's noise would
@@ -656,7 +660,12 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
             f"{mu_fit.source}"
         )
     else:
-        why = "FusedSettings.identify_mu is off" if mu_fit is None else mu_fit.note
+        if mu_fit is not None:
+            why = mu_fit.note
+        elif not nz.identify_mu:
+            why = "FusedSettings.identify_mu is off"
+        else:
+            why = "the causal filter keeps the settings' mu (FusedSettings.identify_mu_causal)"
         notes["mu_prior"] = f"{nz.mu_prior:g} +- {nz.mu_prior_sigma:g} (settings): {why}"
     q = _process_psd(nx, nz)
     if not (has_pos or has_vel):

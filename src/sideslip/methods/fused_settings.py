@@ -57,16 +57,21 @@ class FusedSettings:
     mu_prior: float = 1.0  # dry asphalt
     mu_prior_sigma: float = 0.35
     # mu's prior mean from the drive's own understeer angle where the drive used at least 90 %
-    # of it (sideslip.calibrate.friction; read from the whole drive, for the causal filter
-    # too, as a calibration); its width stays mu_prior_sigma: the fit's mu is the one the
-    # file's rear stiffness needs, and with a file 30 % off the state must keep room to trade
-    # (the fit's own 1-sigma, 0.01-0.03 at the limit, as the width: fused_filter on
-    # cr_limit_ramp seed 11 with a soft file and a 5 s multipath burst 2.78 deg with 64 %
-    # inside 2 sigma; with 0.35, 1.82 / 94 %).  Near the limit the axle curve's slip follows
-    # mu: mu_prior 1.0 on a 0.6 road kept the rear axle's slip half the truth (cr_limit_ramp,
-    # CommonRoad BMW on mu 0.6, right file, no GNSS: beta RMSE 0.31 -> 0.07 deg;
-    # benchmarks/results/friction.md)
-    identify_mu: bool = True
+    # of it (sideslip.calibrate.friction); its width stays mu_prior_sigma (the fit's own
+    # 0.01-0.03 as the width: fused_filter on cr_limit_ramp seed 11, soft file, 5 s multipath
+    # burst, 2.78 deg with 64 % inside 2 sigma).  Not the default: the fit decides the mu of
+    # the axle that saturates, and the estimator has one mu, read by the rear axle's relation.
+    # On CommonRoad's BMW limit ramp (front axle saturating) the rear took the front's mu well
+    # (no GNSS, seeds 0-1: 0.317 -> 0.073 deg with the right file, 0.528 -> 0.100 with one
+    # 30 % stiff; but 0.181 -> 0.204 and 0.221 -> 0.275 with the soft and rough files, whose
+    # excess slip a mu too high had offset); on the front-heavy Ford Escort, a car no default
+    # was measured on, the same ramp got worse (right file 0.164 -> 0.275 deg with Doppler,
+    # 0.117 -> 0.145 without GNSS): with the front's mu its lightly loaded rear axle's slip is
+    # over-predicted (plateau beta -0.67 deg with Doppler against the truth's -0.29 and -0.43
+    # with the prior), and the drive, whose rear stayed below its limit, does not decide the
+    # rear's own mu.  benchmarks/results/friction.md (b), (e)
+    identify_mu: bool = False
+    identify_mu_causal: bool = False  # the causal filter too (with identify_mu)
     mu_psd: float = 0.02  # 1/sqrt(s): patches of another surface
     latency_prior_sigma_s: float = 0.1  # s: receivers stamp fixes 0-200 ms late
     latency_psd: float = 1e-5  # s/sqrt(s)
