@@ -41,6 +41,17 @@ GYRO_BIAS_PRIOR = 0.02  # rad/s: prior 1-sigma of the gyro bias (~1 deg/s)
 MIN_ROWS = 20
 MIN_WINDOWS = 20  # GNSS windows (40 s of driving): fewer cannot average the sideslip changes out
 MIN_STILL_S = 5.0  # s of standstill that tell the bias alone
+# a shorter drive (at least MIN_WINDOWS_RAW windows, 10 s) still tells the bias of an
+# uncalibrated gyro: a fit at least RAW_BIAS_MIN and RAW_BIAS_SIGMAS of its 1-sigma from 0,
+# degrees per second that a drive's sideslip changes (a few degrees over the drive: a tenth of
+# a degree per second over 20 s) cannot fake.  A calibrated gyro's tenths (the simulator's
+# 0.2 deg/s rms) stay as recorded: on banked_turn (28 s) a 0.12 +- 0.02 deg/s fit of a 0.09
+# truth took seed 002's graph from 0.022 to 0.029 deg.  As recorded, seed 002's graph, its
+# fixed-lag form and the linear KF kept a 5.3 deg/s bias on dlc_bank (30 s, positions only:
+# 0.41 deg beta RMSE with 35 % inside 2 sigma); benchmarks/results/gyro_zero_short.md
+MIN_WINDOWS_RAW = 5
+RAW_BIAS_SIGMAS = 4.0
+RAW_BIAS_MIN = math.radians(0.5)  # rad/s: beyond a calibrated MEMS gyro's turn-on bias
 
 
 def wheel_speed_scale(sig: Signals) -> Fitted:
@@ -142,12 +153,15 @@ def gyro_bias_scale(sig: Signals | GyroSignals) -> tuple[Fitted, Fitted]:
     epochs_per_window = max(1, round(GYRO_WINDOW_S / sig.g_dt)) if n_gnss else 0
     rows_gnss = int(kept[:n_gnss].sum()) * epochs_per_window
     rows_still = n_still if kept[n_gnss:].any() else 0
-    enough_windows = int(kept[:n_gnss].sum()) >= MIN_WINDOWS
+    n_windows = int(kept[:n_gnss].sum())
+    enough_windows = n_windows >= MIN_WINDOWS
     enough_still = n_still * float(np.median(np.diff(sig.t))) >= MIN_STILL_S if n_still else False
+    b_fit = abs(float(fit.theta[1]))
+    raw_gyro = n_windows >= MIN_WINDOWS_RAW and b_fit >= max(RAW_BIAS_MIN, RAW_BIAS_SIGMAS * float(sd[1]))
     bias_ok = (
         informed(float(sd[1]), GYRO_BIAS_PRIOR, 0.25)
         and fit.clusters >= 4
-        and (enough_windows or enough_still)
+        and (enough_windows or enough_still or raw_gyro)
     )
     scale_ok = (
         n_gnss > 0 and informed(float(sd[0]), GYRO_SCALE_PRIOR) and fit.clusters >= 4 and enough_windows
@@ -155,7 +169,12 @@ def gyro_bias_scale(sig: Signals | GyroSignals) -> tuple[Fitted, Fitted]:
     bias = (
         Fitted(bias_name, float(fit.theta[1]), float(sd[1]), rows_gnss + rows_still, src, True, "rad/s", 0.0)
         if bias_ok
-        else left_alone(bias_name, 0.0, "rad/s", "too little standstill (5 s) or GNSS course (40 s)")
+        else left_alone(
+            bias_name,
+            0.0,
+            "rad/s",
+            "too little standstill (5 s) or GNSS course (40 s; 10 s for a bias beyond 0.5 deg/s and 4 sigma)",
+        )
     )
     scale = (
         Fitted(scale_name, float(fit.theta[0]), float(sd[0]), rows_gnss, src, True, "-", 1.0)
@@ -206,9 +225,13 @@ def gyro_zero_params(zero: Fitted, subtracted: bool = True) -> dict[str, object]
     bias state from it."""
     if not zero.informed:
         return {"gyro_zero_rad_s": 0.0, "gyro_zero_note": f"not told by the drive: {zero.note}"}
-    out: dict[str, object] = {"gyro_zero_rad_s": zero.value, "gyro_zero_rad_s_sigma": zero.sigma,
-                              "gyro_zero_source": zero.source}
+    out: dict[str, object] = {
+        "gyro_zero_rad_s": zero.value,
+        "gyro_zero_rad_s_sigma": zero.sigma,
+        "gyro_zero_source": zero.source,
+    }
     if subtracted and subtracted_zero(zero) == 0.0:
-        out["gyro_zero_note"] = (f"within {ZERO_SIGNIFICANCE:g} sigma of 0: not subtracted, the "
-                                 "samples as recorded")
+        out["gyro_zero_note"] = (
+            f"within {ZERO_SIGNIFICANCE:g} sigma of 0: not subtracted, the samples as recorded"
+        )
     return out

@@ -1,0 +1,177 @@
+"""The drive's own gyro zero on drives shorter than 40 s (``sideslip.calibrate.sensors``):
+before, such a drive never told the zero unless it stood still for 5 s, so the methods whose
+papers assume a zeroed gyro ran on an uncalibrated gyro's degrees per second; now a drive
+with 10 s of GNSS course tells it where the fit is at least 0.5 deg/s and 4 of its 1-sigma
+from 0, an uncalibrated gyro (``MIN_WINDOWS_RAW``, ``RAW_BIAS_MIN``, ``RAW_BIAS_SIGMAS``).
+
+Run: .venv/bin/python benchmarks/gyro_zero_short.py
+Writes benchmarks/results/gyro_zero_short.md.
+
+(a) the fitted zero against the simulator's mean gyro bias on every comparison scenario shorter
+    than 40 s, seeds 0-1, GNSS Doppler and positions only (compare_methods' issue-15
+    receiver), with the simulator's turn-on bias (0.2 deg/s rms) and with an uncalibrated
+    gyro's (3 deg/s rms).
+(b) beta RMSE (deg) and the share of errors inside 2 beta_std of every method that subtracts
+    the zero, before -> after, on the same drives with the 3 deg/s gyro, mean over them; and
+    the drives whose result moved by more than 0.05 deg.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import math
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from compare_methods import POSITIONS_ONLY, SCENARIOS, two_sigma_share
+
+import sideslip.calibrate.sensors as sensors
+from sideslip.evaluate import metrics
+from sideslip.methods.registry import run_method
+from sideslip.simulate import SensorConfig, simulate
+from sideslip.simulate.run import _lookup
+from sideslip.vehicle import load_vehicle
+
+OUT = Path(__file__).parent / "results" / "gyro_zero_short.md"
+SHORT_S = 40.0  # drives shorter than this never had MIN_WINDOWS of course
+RAW_DEG_S = 3.0  # rms turn-on bias of an uncalibrated MEMS gyro (comma2k19's phone: -3.9 deg/s)
+METHODS = (
+    "fg_batch", "fg_lag", "kf_linear", "kkf", "mkf", "mkf_adaptive", "obs_bicycle",
+    "obs_kinematic", "obs_modified", "obs_modified_nocomp",
+)  # fmt: skip
+MODES = ("doppler", "positions")
+
+
+def drive_for(name: str, seed: int, mode: str, raw: bool) -> Any:
+    over: dict[str, Any] = dict(POSITIONS_ONLY) if mode == "positions" else {}
+    if raw:
+        over["gyro_bias_std"] = math.radians(RAW_DEG_S)
+    config = SensorConfig().with_overrides(_lookup(name).sensor_overrides).with_overrides(over)
+    return simulate(name, seed=seed, config=config)
+
+
+def short_scenarios() -> list[str]:
+    out = []
+    for name in SCENARIOS:
+        drive = simulate(name, seed=0)
+        if float(drive.t[-1] - drive.t[0]) < SHORT_S:
+            out.append(name)
+    return out
+
+
+def fit_table(names: list[str]) -> list[str]:
+    lines = [
+        "## (a) The fitted zero against the truth (deg/s)",
+        "",
+        "| gyro | GNSS | scenario | seed | truth | before | after (± 1σ) |",
+        "|---|---|---|---:|---:|---:|---:|",
+    ]
+    errs: dict[str, list[float]] = {"before": [], "after": []}
+    for raw in (False, True):
+        for mode in MODES:
+            for name in names:
+                for seed in (0, 1):
+                    drive = drive_for(name, seed, mode, raw)
+                    vehicle = load_vehicle(drive.meta["vehicle"])
+                    truth = float(drive.meta["truth_sensor"]["gyro_bias_mean"][2])
+                    cells = []
+                    for key, windows in (("before", 10**9), ("after", sensors.MIN_WINDOWS_RAW)):
+                        saved = sensors.MIN_WINDOWS_RAW
+                        sensors.MIN_WINDOWS_RAW = windows
+                        try:
+                            fit = sensors.drive_gyro_bias(drive, vehicle.gnss_xyz)
+                        finally:
+                            sensors.MIN_WINDOWS_RAW = saved
+                        used = sensors.subtracted_zero(fit)
+                        if raw:
+                            errs[key].append(math.degrees(used - truth))
+                        if fit.informed:
+                            cells.append(f"{math.degrees(fit.value):+.2f} ± {math.degrees(fit.sigma):.2f}")
+                        else:
+                            cells.append("–")
+                    gyro = f"{RAW_DEG_S:g} deg/s" if raw else "0.2 deg/s"
+                    lines.append(
+                        f"| {gyro} | {mode} | {name} | {seed} | {math.degrees(truth):+.2f} | {cells[0]} | {cells[1]} |"
+                    )
+    rms = {k: float(np.sqrt(np.mean(np.square(v)))) for k, v in errs.items()}
+    lines += [
+        "",
+        f"With the {RAW_DEG_S:g} deg/s gyro, rms of the bias left in the samples the methods use "
+        f"(truth less the zero subtracted): before {rms['before']:.2f} deg/s, after {rms['after']:.2f} deg/s.",
+        "",
+    ]
+    return lines
+
+
+def effect_table(names: list[str]) -> list[str]:
+    lines = [
+        f"## (b) Methods on the short drives with the {RAW_DEG_S:g} deg/s gyro, before -> after",
+        "",
+        "Mean beta RMSE (deg) over the short drives x seeds 0-1, and the lowest share of beta "
+        "errors inside 2 beta_std (– for methods without a beta_std).",
+        "",
+        "| method | GNSS | beta RMSE | lowest 2σ share |",
+        "|---|---|---:|---:|",
+    ]
+    moved: list[str] = []
+    for mode in MODES:
+        res: dict[str, dict[str, list[tuple[float, float | None]]]] = {
+            m: {"before": [], "after": []} for m in METHODS
+        }
+        for name in names:
+            for seed in (0, 1):
+                drive = drive_for(name, seed, mode, True)
+                vehicle = load_vehicle(drive.meta["vehicle"])
+                for method in METHODS:
+                    pair = []
+                    for key, windows in (("before", 10**9), ("after", sensors.MIN_WINDOWS_RAW)):
+                        saved = sensors.MIN_WINDOWS_RAW
+                        sensors.MIN_WINDOWS_RAW = windows
+                        try:
+                            est = run_method(method, drive, vehicle)
+                        finally:
+                            sensors.MIN_WINDOWS_RAW = saved
+                        rmse = metrics(drive, est.series)["beta_rmse_deg"]
+                        res[method][key].append((rmse, two_sigma_share(drive, est)))
+                        pair.append(rmse)
+                    if abs(pair[1] - pair[0]) > 0.05:
+                        moved.append(f"{method} {mode} {name} seed {seed}: {pair[0]:.3f} -> {pair[1]:.3f}")
+        for method in METHODS:
+            cells = []
+            for what in ("rmse", "share"):
+                vals = []
+                for key in ("before", "after"):
+                    got = res[method][key]
+                    if what == "rmse":
+                        vals.append(f"{np.mean([g[0] for g in got]):.3f}")
+                    else:
+                        shares = [g[1] for g in got if g[1] is not None]
+                        vals.append(f"{min(shares):.2f}" if shares else "–")
+                cells.append(" -> ".join(vals))
+            lines.append(f"| {method} | {mode} | {cells[0]} | {cells[1]} |")
+    lines += ["", "Moved by more than 0.05 deg: " + ("; ".join(moved) if moved else "none") + ".", ""]
+    return lines
+
+
+def main() -> None:
+    start = time.perf_counter()
+    names = short_scenarios()
+    body = [*fit_table(names), *effect_table(names)]
+    stamp = dt.datetime.now(dt.UTC).strftime("%Y-%m-%d %H:%M UTC")
+    head = [
+        "# The gyro zero on short drives",
+        "",
+        f"Measured {stamp} by `benchmarks/gyro_zero_short.py` ({time.perf_counter() - start:.0f} s).  "
+        f"Scenarios shorter than {SHORT_S:g} s: {', '.join(names)}.  Before: such a drive tells the "
+        "zero only with 5 s of standstill; after: also with 10 s of GNSS course where the fit is at "
+        "least 0.5 deg/s and 4σ from 0.  Truth: the simulator's mean yaw-gyro bias over the drive.",
+        "",
+    ]
+    OUT.write_text("\n".join(head + body))
+    print(f"wrote {OUT}")
+
+
+if __name__ == "__main__":
+    main()
