@@ -14,6 +14,8 @@ Writes benchmarks/results/gyro_zero_short.md.
 (b) beta RMSE (deg) and the share of errors inside 2 beta_std of every method that subtracts
     the zero, before -> after, on the same drives with the 3 deg/s gyro, mean over them; and
     the drives whose result moved by more than 0.05 deg.
+(c) real clips: 20 and 30 s pieces of the comma2k19 minute (a phone gyro, -3.9 deg/s raw;
+    the reference is comma's pose), where ../shared/data is present.
 """
 
 from __future__ import annotations
@@ -155,10 +157,52 @@ def effect_table(names: list[str]) -> list[str]:
     return lines
 
 
+COMMA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "comma2k19_example1"
+COMMA_SEGMENT = COMMA / "b0c9d2329ad1606b_2018-08-02--08-34-47_40"
+CLIPS = ((0.0, 20.0), (0.0, 30.0), (15.0, 45.0), (30.0, 60.0))  # s from the segment's start
+
+
+def comma_table() -> list[str]:
+    if not COMMA_SEGMENT.is_dir():
+        return []
+    from sideslip.io import convert
+
+    drive = convert("comma2k19", COMMA_SEGMENT, None, None)
+    vehicle = load_vehicle("rav4")
+    lines = [
+        "## (c) Clips of the comma2k19 minute (phone gyro), before -> after",
+        "",
+        "The whole minute's zero: "
+        f"{math.degrees(sensors.drive_gyro_bias(drive, vehicle.gnss_xyz).value):+.2f} deg/s.  "
+        "beta RMSE (deg) against comma's pose, rows above 5 m/s.",
+        "",
+        "| clip (s) | zero (deg/s) | " + " | ".join(METHODS) + " |",
+        "|---|---:|" + "---:|" * len(METHODS),
+    ]
+    for t0, t1 in CLIPS:
+        start, stop = np.searchsorted(drive.t, drive.t[0] + np.array([t0, t1]))
+        clip = drive.slice(int(start), int(stop))
+        zeros, cells = [], {m: [] for m in METHODS}
+        for windows in (10**9, sensors.MIN_WINDOWS_RAW):
+            saved = sensors.MIN_WINDOWS_RAW
+            sensors.MIN_WINDOWS_RAW = windows
+            try:
+                zero = sensors.drive_gyro_bias(clip, vehicle.gnss_xyz)
+                zeros.append(f"{math.degrees(zero.value):+.2f}" if zero.informed else "–")
+                for method in METHODS:
+                    est = run_method(method, clip, vehicle)
+                    cells[method].append(f"{metrics(clip, est.series)['beta_rmse_deg']:.3f}")
+            finally:
+                sensors.MIN_WINDOWS_RAW = saved
+        row = [f"{t0:g}-{t1:g}", " -> ".join(zeros), *(" -> ".join(cells[m]) for m in METHODS)]
+        lines.append("| " + " | ".join(row) + " |")
+    return [*lines, ""]
+
+
 def main() -> None:
     start = time.perf_counter()
     names = short_scenarios()
-    body = [*fit_table(names), *effect_table(names)]
+    body = [*fit_table(names), *effect_table(names), *comma_table()]
     stamp = dt.datetime.now(dt.UTC).strftime("%Y-%m-%d %H:%M UTC")
     head = [
         "# The gyro zero on short drives",
