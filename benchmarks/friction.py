@@ -24,7 +24,6 @@ Writes benchmarks/results/friction.md.
 from __future__ import annotations
 
 import argparse
-import datetime as dt
 import math
 import time
 from dataclasses import replace
@@ -33,6 +32,7 @@ from typing import Any
 
 import numpy as np
 from compare_methods import FILES, REVS_LAP, SCENARIOS, load_scenario
+from results_file import write_result
 
 from sideslip.calibrate.friction import drive_friction
 from sideslip.evaluate import metrics
@@ -226,19 +226,14 @@ def main() -> None:
         "",
     ]
     body = [*fits, *effect_tables(names), *speed_table(cost), *causal, *unseen_table()]
-    stamp = dt.datetime.now(dt.UTC).strftime("%Y-%m-%d %H:%M UTC")
-    head = [
-        "# The drive's own road friction",
-        "",
-        f"Measured {stamp} by `benchmarks/friction.py` ({time.perf_counter() - start:.0f} s).  "
+    write_result(
+        OUT, "The drive's own road friction", "benchmarks/friction.py", time.perf_counter() - start,
         "`sideslip.calibrate.friction.drive_friction` fits mu to the drive's understeer angle "
         "(steer - L r / v against the brush curves' front minus rear slip), with a steering offset "
         "and the front stiffness scale as nuisance, where the drive used at least 90 % of the fitted "
         "mu; with `identify_mu` (off by default: (e)) `fused` takes it as mu's prior mean.",
-        "",
-    ]
-    OUT.write_text("\n".join(head + body))
-    print(f"wrote {OUT}")
+        body,
+    )  # fmt: skip
 
 
 if __name__ == "__main__":

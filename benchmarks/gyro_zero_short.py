@@ -20,7 +20,6 @@ Writes benchmarks/results/gyro_zero_short.md.
 
 from __future__ import annotations
 
-import datetime as dt
 import math
 import time
 from pathlib import Path
@@ -28,6 +27,7 @@ from typing import Any
 
 import numpy as np
 from compare_methods import POSITIONS_ONLY, SCENARIOS, two_sigma_share
+from results_file import write_result
 
 import sideslip.calibrate.sensors as sensors
 from sideslip.evaluate import metrics
@@ -203,18 +203,13 @@ def main() -> None:
     start = time.perf_counter()
     names = short_scenarios()
     body = [*fit_table(names), *effect_table(names), *comma_table()]
-    stamp = dt.datetime.now(dt.UTC).strftime("%Y-%m-%d %H:%M UTC")
-    head = [
-        "# The gyro zero on short drives",
-        "",
-        f"Measured {stamp} by `benchmarks/gyro_zero_short.py` ({time.perf_counter() - start:.0f} s).  "
+    write_result(
+        OUT, "The gyro zero on short drives", "benchmarks/gyro_zero_short.py", time.perf_counter() - start,
         f"Scenarios shorter than {SHORT_S:g} s: {', '.join(names)}.  Before: such a drive tells the "
         "zero only with 5 s of standstill; after: also with 10 s of GNSS course where the fit is at "
         "least 0.5 deg/s and 4σ from 0.  Truth: the simulator's mean yaw-gyro bias over the drive.",
-        "",
-    ]
-    OUT.write_text("\n".join(head + body))
-    print(f"wrote {OUT}")
+        body,
+    )  # fmt: skip
 
 
 if __name__ == "__main__":

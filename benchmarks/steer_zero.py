@@ -18,13 +18,13 @@ Writes benchmarks/results/steer_zero.md.
 from __future__ import annotations
 
 import argparse
-import datetime as dt
 import math
 import time
 from pathlib import Path
 
 import numpy as np
 from compare_methods import FILES, REVS_LAP, SCENARIOS, load_scenario
+from results_file import write_result
 
 from sideslip.calibrate.steer_zero import drive_steer_offset, subtracted_offset
 from sideslip.evaluate import metrics
@@ -57,7 +57,9 @@ def offset_table(seeds: int) -> list[str]:
             truth = float(drive.meta["truth_sensor"]["steer_offset"])  # type: ignore[attr-defined]
             if not fit.informed:
                 left.append(f"{name} seed {seed} ({fit.note})")
-                lines.append(f"| {name} | {seed} | {math.degrees(truth):+.3f} | – | – | – | no | {cost[-1]:.3f} |")
+                lines.append(
+                    f"| {name} | {seed} | {math.degrees(truth):+.3f} | – | – | – | no | {cost[-1]:.3f} |"
+                )
                 continue
             e = fit.value - truth
             err.append(e)
@@ -124,18 +126,24 @@ def effect_tables() -> list[str]:
                         sums[m][2] += 1
             what = "beta" if key == "beta" else "roll"
             out += [f"### {what} RMSE (deg), {title}: steer as recorded → through the drive's zero", ""]
-            out.append("| method | " + " | ".join(names) + " | mean (simulated) | better / worse by > 0.005 |")
+            out.append(
+                "| method | " + " | ".join(names) + " | mean (simulated) | better / worse by > 0.005 |"
+            )
             out.append("|---|" + "---:|" * (len(names) + 2))
             for m in methods:
                 if not cells[m]:
                     continue
-                pairs = [tuple(float(x) for x in c.split(" → ")) for k, c in cells[m].items() if k in SCENARIOS]
+                pairs = [
+                    tuple(float(x) for x in c.split(" → ")) for k, c in cells[m].items() if k in SCENARIOS
+                ]
                 better = sum(b < a - 0.005 for a, b in pairs)
                 worse = sum(b > a + 0.005 for a, b in pairs)
                 n = max(sums[m][2], 1.0)
                 row = [cells[m].get(name, "–") for name in names]
                 out.append(
-                    f"| {m} | " + " | ".join(row) + f" | {sums[m][0] / n:.3f} → {sums[m][1] / n:.3f} | {better} / {worse} |"
+                    f"| {m} | "
+                    + " | ".join(row)
+                    + f" | {sums[m][0] / n:.3f} → {sums[m][1] / n:.3f} | {better} / {worse} |"
                 )
             out.append("")
     return out
@@ -163,7 +171,9 @@ def speed_table() -> list[str]:
                 run_method(m, drive, vehicle, {"zero_steer": on})  # type: ignore[arg-type]
                 times.append(time.perf_counter() - start)
             best[on] = min(times)
-        lines.append(f"| {m} | {best[False]:.3f} | {best[True]:.3f} | {n / best[False]:,.0f} | {n / best[True]:,.0f} |")
+        lines.append(
+            f"| {m} | {best[False]:.3f} | {best[True]:.3f} | {n / best[False]:,.0f} | {n / best[True]:,.0f} |"
+        )
     return [*lines, ""]
 
 
@@ -172,20 +182,21 @@ def main() -> None:
     parser.add_argument("--seeds", type=int, default=3)
     args = parser.parse_args()
     start = time.perf_counter()
-    body = [*offset_table(args.seeds), "## (b) Effect on the methods, seed 0", "", *effect_tables(), *speed_table()]
-    stamp = dt.datetime.now(dt.UTC).strftime("%Y-%m-%d %H:%M UTC")
-    head = [
-        "# The drive's own steering zero",
+    body = [
+        *offset_table(args.seeds),
+        "## (b) Effect on the methods, seed 0",
         "",
-        f"Measured {stamp} by `benchmarks/steer_zero.py` ({time.perf_counter() - start:.0f} s).  "
+        *effect_tables(),
+        *speed_table(),
+    ]
+    write_result(
+        OUT, "The drive's own steering zero", "benchmarks/steer_zero.py", time.perf_counter() - start,
         "`sideslip.calibrate.steer_zero.drive_steer_offset` fits calibrate's steering relation "
         "alone on the drive's 0.1 s grid; the paper methods that read the steer subtract it where "
         "it is more than 2σ from 0 (`zero_steer`, on by default).  Truth: the simulator's drawn "
         "sensor offset (`meta.truth_sensor.steer_offset`, road wheel).",
-        "",
-    ]
-    OUT.write_text("\n".join(head + body))
-    print(f"wrote {OUT}")
+        body,
+    )  # fmt: skip
 
 
 if __name__ == "__main__":

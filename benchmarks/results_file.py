@@ -1,0 +1,16 @@
+"""Writing a benchmark's result file: a title, the line that says when and by what it was
+measured (with its run time), an introduction, then the body."""
+
+from __future__ import annotations
+
+import datetime as dt
+from pathlib import Path
+
+
+def write_result(out: Path, title: str, script: str, elapsed_s: float, intro: str, body: list[str]) -> None:
+    """Write ``out`` as markdown: ``# title``, "Measured <UTC> by `script` (<elapsed> s)." and
+    ``intro`` as one paragraph, then the ``body`` lines; print where it went."""
+    stamp = dt.datetime.now(dt.UTC).strftime("%Y-%m-%d %H:%M UTC")
+    head = [f"# {title}", "", f"Measured {stamp} by `{script}` ({elapsed_s:.0f} s).  {intro}", ""]
+    out.write_text("\n".join(head + body))
+    print(f"wrote {out}")
