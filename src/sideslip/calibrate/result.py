@@ -88,3 +88,17 @@ class Calibration:
         out["notes"] = list(self.notes)
         out["gates"] = dict(self.gates)
         return out
+
+
+def zero_params(
+    zero: Fitted, key: str, name: str, subtracted: bool, significance: float
+) -> dict[str, object]:
+    """A method's params entries for a sensor zero the drive told (or not): ``key`` (the value,
+    e.g. ``gyro_zero_rad_s``), ``key_sigma``, ``name_source``, and ``name_note`` where the drive
+    did not tell it or where it was not ``subtracted`` (within ``significance`` sigma of 0)."""
+    if not zero.informed:
+        return {key: 0.0, f"{name}_note": f"not told by the drive: {zero.note}"}
+    out: dict[str, object] = {key: zero.value, f"{key}_sigma": zero.sigma, f"{name}_source": zero.source}
+    if not subtracted:
+        out[f"{name}_note"] = f"within {significance:g} sigma of 0: not subtracted, the samples as recorded"
+    return out

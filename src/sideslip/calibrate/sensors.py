@@ -27,7 +27,7 @@ from numpy.typing import NDArray
 
 from sideslip.calibrate.fit import clusters_of, fit_robust, informed
 from sideslip.calibrate.prepare import GyroSignals, Signals, gyro_signals
-from sideslip.calibrate.result import Fitted, left_alone
+from sideslip.calibrate.result import Fitted, left_alone, zero_params
 from sideslip.drive import Drive
 
 FloatArray = NDArray[np.float64]
@@ -223,15 +223,5 @@ def gyro_zero_params(zero: Fitted, subtracted: bool = True) -> dict[str, object]
     """A method's params entries for the drive's gyro zero (:func:`drive_gyro_bias`);
     ``subtracted``: the method subtracts it (:func:`subtracted_zero`) rather than starting a
     bias state from it."""
-    if not zero.informed:
-        return {"gyro_zero_rad_s": 0.0, "gyro_zero_note": f"not told by the drive: {zero.note}"}
-    out: dict[str, object] = {
-        "gyro_zero_rad_s": zero.value,
-        "gyro_zero_rad_s_sigma": zero.sigma,
-        "gyro_zero_source": zero.source,
-    }
-    if subtracted and subtracted_zero(zero) == 0.0:
-        out["gyro_zero_note"] = (
-            f"within {ZERO_SIGNIFICANCE:g} sigma of 0: not subtracted, the samples as recorded"
-        )
-    return out
+    zeroed = not subtracted or subtracted_zero(zero) != 0.0
+    return zero_params(zero, "gyro_zero_rad_s", "gyro_zero", zeroed, ZERO_SIGNIFICANCE)

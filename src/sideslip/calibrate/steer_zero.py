@@ -31,7 +31,7 @@ from numpy.typing import NDArray
 
 from sideslip.calibrate.axle_stiffness import SensorCal, fit_axles
 from sideslip.calibrate.prepare import MAX_GAP_S, SMOOTH_S, STANDSTILL_MPS, STEER_GRID_S, moving_mean
-from sideslip.calibrate.result import Fitted, left_alone
+from sideslip.calibrate.result import Fitted, left_alone, zero_params
 from sideslip.calibrate.roll import file_roll_gradient
 from sideslip.calibrate.sensors import ZERO_SIGNIFICANCE, drive_gyro_bias, subtracted_zero
 from sideslip.drive import Drive
@@ -172,15 +172,5 @@ def subtracted_offset(offset: Fitted) -> float:
 
 def steer_zero_params(offset: Fitted) -> dict[str, object]:
     """A method's params entries for the drive's steering offset (:func:`drive_steer_offset`)."""
-    if not offset.informed:
-        return {"steer_offset_rad": 0.0, "steer_offset_note": f"not told by the drive: {offset.note}"}
-    out: dict[str, object] = {
-        "steer_offset_rad": offset.value,
-        "steer_offset_rad_sigma": offset.sigma,
-        "steer_offset_source": offset.source,
-    }
-    if subtracted_offset(offset) == 0.0:
-        out["steer_offset_note"] = (
-            f"within {ZERO_SIGNIFICANCE:g} sigma of 0: not subtracted, the samples as recorded"
-        )
-    return out
+    zeroed = subtracted_offset(offset) != 0.0
+    return zero_params(offset, "steer_offset_rad", "steer_offset", zeroed, ZERO_SIGNIFICANCE)
