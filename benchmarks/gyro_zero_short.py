@@ -83,7 +83,7 @@ def fit_table(names: list[str]) -> list[str]:
                         saved = sensors.MIN_WINDOWS_RAW
                         sensors.MIN_WINDOWS_RAW = windows
                         try:
-                            fit = sensors.drive_gyro_bias(drive, vehicle.gnss_xyz)
+                            fit = sensors.drive_gyro_bias(drive, vehicle)
                         finally:
                             sensors.MIN_WINDOWS_RAW = saved
                         used = sensors.subtracted_zero(fit)
@@ -173,7 +173,7 @@ def comma_table() -> list[str]:
         "## (c) Clips of the comma2k19 minute (phone gyro), before -> after",
         "",
         "The whole minute's zero: "
-        f"{math.degrees(sensors.drive_gyro_bias(drive, vehicle.gnss_xyz).value):+.2f} deg/s.  "
+        f"{math.degrees(sensors.drive_gyro_bias(drive, vehicle).value):+.2f} deg/s.  "
         "beta RMSE (deg) against comma's pose, rows above 5 m/s.",
         "",
         "| clip (s) | zero (deg/s) | " + " | ".join(METHODS) + " |",
@@ -187,7 +187,7 @@ def comma_table() -> list[str]:
             saved = sensors.MIN_WINDOWS_RAW
             sensors.MIN_WINDOWS_RAW = windows
             try:
-                zero = sensors.drive_gyro_bias(clip, vehicle.gnss_xyz)
+                zero = sensors.drive_gyro_bias(clip, vehicle)
                 zeros.append(f"{math.degrees(zero.value):+.2f}" if zero.informed else "–")
                 for method in METHODS:
                     est = run_method(method, clip, vehicle)

@@ -384,7 +384,7 @@ def test_observers_subtract_the_drive_zero_before_any_standstill(method: str) ->
     off = run_method(all_methods()[method], raw_gyro(drive), vehicle, {"zero_gyro": False})
     assert metrics(drive, off.series)["beta_rmse_deg"] > base["beta_rmse_deg"] + 0.03
     # the fit's 1 deg/s prior on the bias pulls a large one by a share of its 1-sigma only
-    zero = drive_gyro_bias(drive, vehicle.gnss_xyz)
+    zero = drive_gyro_bias(drive, vehicle)
     assert est.params["gyro_zero_rad_s"] == pytest.approx(PHONE_BIAS + zero.value, abs=zero.sigma)
 
 

@@ -24,6 +24,7 @@ from sideslip.calibrate.prepare import AY_LINEAR_MAX, RDOT_MAX, V_GNSS_MIN, V_ST
 from sideslip.calibrate.result import Calibration, Fitted, left_alone
 from sideslip.calibrate.roll import file_roll_gradient, misalignment_fits, roll_from_gnss
 from sideslip.calibrate.sensors import gyro_bias_scale, wheel_speed_scale
+from sideslip.calibrate.wheel_yaw import wheel_gyro_zero
 from sideslip.drive import SPEED_COLUMNS, Drive
 from sideslip.errors import InputError
 from sideslip.imu_lever import drive_at_cg
@@ -94,6 +95,9 @@ def calibrate(drive: Drive, vehicle: Vehicle) -> Calibration:
     sig = prepare(drive, vehicle.gnss_xyz)
     wheel = wheel_speed_scale(sig)
     bias, gscale = gyro_bias_scale(sig)
+    if not bias.informed:  # no GNSS course, no standstill: the rear wheels' speed difference
+        wheels = wheel_gyro_zero(drive, vehicle.track_rear)
+        bias = wheels if wheels.informed else bias
     roll, yaw_mis = roll_from_gnss(sig, vehicle)
     yaw_fit, roll_mis = misalignment_fits(sig, yaw_mis, bias.value, gscale.value)
     k_roll = roll.value if math.isfinite(roll.value) else file_roll_gradient(vehicle)

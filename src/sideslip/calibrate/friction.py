@@ -130,7 +130,7 @@ def drive_friction(
     if not all(math.isfinite(getattr(vehicle, k)) and getattr(vehicle, k) > 0 for k in keys):
         return left_alone(name, math.nan, "", "the vehicle file lacks mass, axle positions or stiffness")
     if gyro_zero is None:
-        gyro_zero = drive_gyro_bias(drive, vehicle.gnss_xyz)
+        gyro_zero = drive_gyro_bias(drive, vehicle)
     sig = steer_signals(drive, subtracted_zero(gyro_zero))
     if sig.ay is None or sig.steer is None or sig.t.size < 3:
         return left_alone(name, math.nan, "", "too few rows")

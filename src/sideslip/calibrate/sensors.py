@@ -25,10 +25,12 @@ from dataclasses import replace
 import numpy as np
 from numpy.typing import NDArray
 
-from sideslip.calibrate.fit import clusters_of, fit_robust, informed
+from sideslip.calibrate.fit import clusters_of, fit_robust, halves_sigma, informed
 from sideslip.calibrate.prepare import GyroSignals, Signals, gyro_signals
 from sideslip.calibrate.result import Fitted, left_alone, zero_params
+from sideslip.calibrate.wheel_yaw import wheel_gyro_zero
 from sideslip.drive import Drive
+from sideslip.vehicle import Vehicle
 
 FloatArray = NDArray[np.float64]
 
@@ -132,16 +134,9 @@ def gyro_bias_scale(sig: Signals | GyroSignals) -> tuple[Fitted, Fitted]:
     prior_mean = np.array([1.0, 0.0])
     prior_sd = np.array([GYRO_SCALE_PRIOR, GYRO_BIAS_PRIOR])
     fit, keep = fit_robust(X, y, clusters_of(tt), prior_mean, prior_sd)
-    sd = fit.sigma()
     # the two halves of the drive apart: a spread beyond their noise (sideslip changes that
     # do not average out, bias walk) is added to the 1-sigma
-    half = tt < np.median(tt)
-    if half.sum() > 10 and (~half).sum() > 10:
-        f1, _ = fit_robust(X[half], y[half], clusters_of(tt[half]), prior_mean, prior_sd)
-        f2, _ = fit_robust(X[~half], y[~half], clusters_of(tt[~half]), prior_mean, prior_sd)
-        d = f1.theta - f2.theta
-        noise = np.diag(f1.cov) + np.diag(f2.cov)
-        sd = np.sqrt(sd**2 + np.maximum(0.0, d * d - noise) / 4.0)
+    sd = halves_sigma(X, y, tt, prior_mean, prior_sd, fit.sigma())
     src_bits = []
     if n_gnss:
         src_bits.append(f"course change over {GYRO_WINDOW_S:g} s windows")
@@ -184,24 +179,32 @@ def gyro_bias_scale(sig: Signals | GyroSignals) -> tuple[Fitted, Fitted]:
     return bias, scale
 
 
-def drive_gyro_bias(drive: Drive, gnss_lever: tuple[float, float, float]) -> Fitted:
+def drive_gyro_bias(drive: Drive, vehicle: Vehicle) -> Fitted:
     """The drive's own gyro zero: :func:`gyro_bias_scale`'s bias from the GNSS course windows
     and the standstill of the whole drive, prepared alone
     (:func:`~sideslip.calibrate.prepare.gyro_signals`: a few passes over the rows, no more;
     ``sideslip calibrate`` fits the same relation on the heading rate corrected for tilt, which
     moves a bias little: comma2k19 minute -3.889 deg/s here, -3.933 there, -3.884 from the
-    reference pose).
+    reference pose); where those do not tell it, the rear wheels' speed difference
+    (:func:`~sideslip.calibrate.wheel_yaw.wheel_gyro_zero`, with the file's rear track).
+    ``vehicle``: the file (its GNSS antenna lever arm and rear track).
 
     For the methods whose papers assume a zeroed gyro (seed 002's graph, seed 003's observers):
     a raw MEMS gyro carries degrees per second (the comma2k19 phone: -3.9 deg/s), which those
     models read as yaw.  Without Doppler velocity the course comes from differenced GNSS
     positions (noisier: the fit's own 1-sigma decides whether it informs the bias).  Not
     informed (the value 0) when the drive has neither 40 s of GNSS course nor 5 s of
-    standstill, or the fit's 1-sigma stays above a quarter of its 1 deg/s prior."""
-    sig = gyro_signals(drive, gnss_lever)
+    standstill nor 20 s of rear wheel speeds at changing speed, or the fits' 1-sigma stays
+    above a quarter of the 1 deg/s prior."""
+    sig = gyro_signals(drive, vehicle.gnss_xyz)
     bias, _scale = gyro_bias_scale(sig)
     if bias.informed and sig.course_source != "Doppler" and sig.has_gnss:
         bias = replace(bias, source=f"{bias.source} (course from GNSS {sig.course_source})")
+    if not bias.informed:
+        wheels = wheel_gyro_zero(drive, vehicle.track_rear)
+        if wheels.informed:
+            return wheels
+        bias = replace(bias, note=f"{bias.note}; {wheels.note}")
     return bias
 
 

@@ -136,7 +136,7 @@ def drive_steer_offset(
     if not all(math.isfinite(getattr(vehicle, k)) for k in ("mass", "lf", "lr")):
         return left_alone(name, 0.0, "rad", "the vehicle file lacks mass or axle positions")
     if gyro_zero is None:
-        gyro_zero = drive_gyro_bias(drive, vehicle.gnss_xyz)
+        gyro_zero = drive_gyro_bias(drive, vehicle)
     sig = signals if signals is not None else steer_signals(drive, subtracted_zero(gyro_zero))
     k_file = file_roll_gradient(vehicle)
     k_roll = k_file if math.isfinite(k_file) else 0.0

@@ -224,7 +224,7 @@ def graph_inputs(
     # the sensor samples as stored (float32 in a compact drive): the compiled factor pass reads
     # each one into double precision exactly, so no float64 copy of the drive is kept
     wz, ay = (_as_stored_float(drive.data[k]) for k in ("wz", "ay"))
-    zero = drive_gyro_bias(drive, vehicle.gnss_xyz) if settings.zero_gyro else None
+    zero = drive_gyro_bias(drive, vehicle) if settings.zero_gyro else None
     steer_zero = drive_steer_offset(drive, vehicle, zero) if settings.zero_steer else None
     if steer_zero is not None:
         delta = delta - subtracted_offset(steer_zero)

@@ -54,7 +54,8 @@ class FactorGraphSettings:
     consistency : inflate the 1-sigma where the windowed NIS of the factors' residuals exceeds
         its chi^2 bound (:mod:`sideslip.filters.consistency`), and report ``health``.
     zero_gyro : subtract the drive's own gyro zero from the yaw-rate factors (the bias of its
-        GNSS course windows and standstill, :func:`sideslip.calibrate.sensors.drive_gyro_bias`,
+        GNSS course windows and standstill, else of its rear wheel speeds,
+        :func:`sideslip.calibrate.sensors.drive_gyro_bias`,
         where more than 2 sigma from 0: :func:`~sideslip.calibrate.sensors.subtracted_zero`).
         The paper's gyro is a calibrated INS; a raw MEMS gyro's bias is read as yaw by the
         model (the comma2k19 phone's -3.9 deg/s: kf_linear 0.170 -> 0.093 deg, fg_lag 0.122 ->

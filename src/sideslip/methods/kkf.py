@@ -478,7 +478,7 @@ def run_kkf(
     rows = np.flatnonzero(np.isfinite(cm.course))
     gnss_dt = float(np.median(np.diff(t[rows]))) if rows.size > 1 else 0.1
     del rows
-    zero = drive_gyro_bias(drive, vehicle.gnss_xyz) if st.zero_gyro else None
+    zero = drive_gyro_bias(drive, vehicle) if st.zero_gyro else None
     bias0, sigma_bias0 = (zero.value / (1.0 + scale), zero.sigma) if zero and zero.informed else (
         0.0, SIGMA_BIAS0)
     x0 = np.array([initial_heading(t, wz - bias0 if bias0 else wz, cm.course, drive), bias0, 0.0])

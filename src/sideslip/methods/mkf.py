@@ -296,7 +296,7 @@ def mkf_problem(
     tab = model_table(vehicle, t, speed, st.noise(), st.v_gate_m_s, split=tune_sy or tune_b)
     cm = gnss.course_at_cg(drive, vehicle, speed, st.v_gate_m_s)
     wz = drive["wz"]
-    zero = drive_gyro_bias(drive, vehicle.gnss_xyz) if st.zero_gyro else None
+    zero = drive_gyro_bias(drive, vehicle) if st.zero_gyro else None
     steer_zero = drive_steer_offset(drive, vehicle, zero) if st.zero_steer and "steer" in drive else None
     if steer_zero is not None:
         u[:, 0] -= subtracted_offset(steer_zero)

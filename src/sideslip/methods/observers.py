@@ -92,13 +92,14 @@ following beta = atan2(v_y, v_x)), r = measured, and the observer restarts from 
 speed rises again.  The state is clipped to |beta| <= 1.2 rad, |r| <= 5 rad/s; every output is
 finite on every row.  The gyro is zeroed at standstill (see
 :func:`sideslip.methods.roll_index.standstill_gyro_bias`) and, before the first standstill, by
-the drive's own zero from its GNSS course (:func:`sideslip.calibrate.sensors.drive_gyro_bias`:
-a raw phone gyro's 3.9 deg/s put obs_kinematic 24.9 deg off on the comma2k19 minute, 0.21
-with the zero; realdata_check.md).  The steering sensor is zeroed with the drive's own
-offset (:func:`sideslip.calibrate.steer_zero.drive_steer_offset`, where more than 2 sigma from
-0): the observers read an offset d0 as a front-axle force c_f d0, i.e. as sideslip on every
-row.  The accelerometer is assumed zeroed
-(the paper's assumption) and the IMU at the CG (lever arms are ignored).
+the drive's own zero from its GNSS course, else its rear wheel speeds
+(:func:`sideslip.calibrate.sensors.drive_gyro_bias`: a raw phone gyro's 3.9 deg/s put
+obs_kinematic 24.9 deg off on the comma2k19 minute, 0.21 with the zero; realdata_check.md;
+0.19 from the wheels alone with the GNSS removed, gyro_zero_wheels.md).  The steering
+sensor is zeroed with the drive's own offset
+(:func:`sideslip.calibrate.steer_zero.drive_steer_offset`, where more than 2 sigma from 0): the
+observers read an offset d0 as a front-axle force c_f d0, i.e. as sideslip on every row.  The
+accelerometer is assumed zeroed (the paper's assumption) and the IMU at the CG (lever arms are ignored).
 Reversing follows the contract's beta = atan2(v_y, v_x) (about +-pi, as the reference
 ``ref_beta`` of the simulator and of the converters), not a forward-equivalent small angle.
 
@@ -499,7 +500,7 @@ def obs_bicycle(drive: Drive, vehicle: Vehicle,
                 settings: BicycleObserverSettings | None = None) -> Estimate:
     """Sideslip from the single-track model corrected by the gyro (module docstring)."""
     st = settings or BicycleObserverSettings()
-    inp = sensor_inputs(drive, vehicle.gnss_xyz if st.zero_gyro else None,
+    inp = sensor_inputs(drive, vehicle if st.zero_gyro else None,
                         vehicle if st.zero_steer else None)
     fresh = _fresh(drive, "wz")
     beta, r_hat = run_bicycle_observer(inp, vehicle, fresh, st.pole_rad_s, st.v_gate_m_s)
@@ -524,7 +525,7 @@ def obs_kinematic(drive: Drive, vehicle: Vehicle,
                   settings: KinematicObserverSettings | None = None) -> Estimate:
     """Kinematic observer with the roll-compensated lateral acceleration (module docstring)."""
     st = settings or KinematicObserverSettings()
-    inp = sensor_inputs(drive, vehicle.gnss_xyz if st.zero_gyro else None,
+    inp = sensor_inputs(drive, vehicle if st.zero_gyro else None,
                         vehicle if st.zero_steer else None)
     roll = estimate_roll_index(inp, vehicle)
     ay = compensate_ay(inp.ay_m, roll.roll)
@@ -549,7 +550,7 @@ def obs_kinematic(drive: Drive, vehicle: Vehicle,
 
 def _modified(drive: Drive, vehicle: Vehicle, st: BicycleObserverSettings, compensate: bool
               ) -> tuple[dict[str, FloatArray], dict[str, object]]:
-    inp = sensor_inputs(drive, vehicle.gnss_xyz if st.zero_gyro else None,
+    inp = sensor_inputs(drive, vehicle if st.zero_gyro else None,
                         vehicle if st.zero_steer else None)
     fresh = _fresh(drive, "wz", "ay")
     series: dict[str, FloatArray] = {}

@@ -252,16 +252,17 @@ def _sample_steps(t: FloatArray, fresh: BoolArray, first_dt: float
     return out
 
 
-def sensor_inputs(drive: Drive, gnss_lever: tuple[float, float, float] | None = None,
+def sensor_inputs(drive: Drive, gyro_vehicle: Vehicle | None = None,
                   steer_vehicle: Vehicle | None = None) -> Inputs:
     """Hold the sensors onto every row; zero the gyro and the steering; see :class:`Inputs`.
 
     The gyro is zeroed at standstill (:func:`standstill_gyro_bias`, causal); on the rows
     before ``STANDSTILL_MIN_S`` of standstill, with the drive's own zero (the bias of its GNSS
-    course windows and standstill, :func:`sideslip.calibrate.sensors.drive_gyro_bias`, a
-    calibration of the whole drive as the papers' "zeroed sensors" are) when ``gnss_lever``
-    (the antenna lever arm, m) is given and the zero is more than 2 sigma from 0
-    (:func:`sideslip.calibrate.sensors.subtracted_zero`), else 0.  The standstill rows
+    course windows and standstill, else its rear wheel speeds,
+    :func:`sideslip.calibrate.sensors.drive_gyro_bias`, a calibration of the whole drive as the
+    papers' "zeroed sensors" are) when ``gyro_vehicle`` (the vehicle file) is given and the
+    zero is more than 2 sigma from 0 (:func:`sideslip.calibrate.sensors.subtracted_zero`),
+    else 0.  The standstill rows
     are those of :func:`sideslip.signals.standstill`, computed from the held speed ``vx`` (the
     same hold of the same samples) rather than a second pass.  With ``steer_vehicle`` (the
     vehicle file) the drive's own steering offset
@@ -279,7 +280,7 @@ def sensor_inputs(drive: Drive, gnss_lever: tuple[float, float, float] | None = 
         still = np.abs(vx) < STANDSTILL_SPEED
     speed_dt = np.asarray(_sample_steps(t, fresh, drive.dt_median if fresh.any() else 0.0))
     wz = drive["wz"] if "wz" in drive else np.zeros_like(t)
-    zero = drive_gyro_bias(drive, gnss_lever) if gnss_lever is not None and "wz" in drive else None
+    zero = drive_gyro_bias(drive, gyro_vehicle) if gyro_vehicle is not None and "wz" in drive else None
     bias = standstill_gyro_bias(t, wz, still, subtracted_zero(zero) if zero is not None else 0.0)
     delta = _held(drive, "steer")
     steer_zero = None
@@ -570,7 +571,7 @@ def roll_index(drive: Drive, vehicle: Vehicle, settings: RollSettings | None = N
                ) -> Estimate:
     """Total roll and road bank by the roll index (see module docstring)."""
     st = settings or RollSettings()
-    inp = sensor_inputs(drive, vehicle.gnss_xyz if st.zero_gyro else None,
+    inp = sensor_inputs(drive, vehicle if st.zero_gyro else None,
                         vehicle if st.zero_steer else None)
     est = estimate_roll_index(inp, vehicle, st.identify_roll_gradient, st.roll_cutoff_hz)
     health, summary = roll_index_health(inp, est, _imu_fresh(drive))
@@ -611,7 +612,7 @@ def roll_dfc(drive: Drive, vehicle: Vehicle, settings: RollSettings | None = Non
     ``identify_roll_gradient`` of the settings does not apply (eq 58's roll does not use it).
     """
     st = settings or RollSettings()
-    inp = sensor_inputs(drive, vehicle.gnss_xyz if st.zero_gyro else None,
+    inp = sensor_inputs(drive, vehicle if st.zero_gyro else None,
                         vehicle if st.zero_steer else None)
     roll, bank, w = estimate_roll_dfc(inp, vehicle, st.roll_cutoff_hz)
     health = np.where(np.abs(inp.vx) >= V_MIN, 1.0 - w, 0.0)
