@@ -22,6 +22,8 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -30,6 +32,7 @@ from compare_methods import POSITIONS_ONLY, SCENARIOS, two_sigma_share
 from results_file import write_result
 
 import sideslip.calibrate.sensors as sensors
+from sideslip.calibrate.result import Fitted, left_alone
 from sideslip.evaluate import metrics
 from sideslip.methods.registry import run_method
 from sideslip.simulate import SensorConfig, simulate
@@ -44,6 +47,26 @@ METHODS = (
     "obs_kinematic", "obs_modified", "obs_modified_nocomp",
 )  # fmt: skip
 MODES = ("doppler", "positions")
+
+
+def _untold(_drive: Any, _track: float) -> Fitted:
+    return left_alone("gyro_bias_rad_s", 0.0, "rad/s", "rear-wheel fallback off (before)")
+
+
+@contextmanager
+def zero_rules(short_drive_rule: bool = True, wheels: bool | None = None) -> Iterator[None]:
+    """``drive_gyro_bias`` with or without the short-drive rule (``MIN_WINDOWS_RAW``) and the
+    rear-wheel fallback (``wheels``; default: with the short-drive rule).  Before either
+    (both off) a drive told the zero only with 40 s of course or 5 s of standstill."""
+    saved = sensors.MIN_WINDOWS_RAW, sensors.wheel_gyro_zero
+    if not short_drive_rule:
+        sensors.MIN_WINDOWS_RAW = 10**9
+    if not (short_drive_rule if wheels is None else wheels):
+        sensors.wheel_gyro_zero = _untold  # type: ignore[assignment]
+    try:
+        yield
+    finally:
+        sensors.MIN_WINDOWS_RAW, sensors.wheel_gyro_zero = saved
 
 
 def drive_for(name: str, seed: int, mode: str, raw: bool) -> Any:
@@ -79,13 +102,9 @@ def fit_table(names: list[str]) -> list[str]:
                     vehicle = load_vehicle(drive.meta["vehicle"])
                     truth = float(drive.meta["truth_sensor"]["gyro_bias_mean"][2])
                     cells = []
-                    for key, windows in (("before", 10**9), ("after", sensors.MIN_WINDOWS_RAW)):
-                        saved = sensors.MIN_WINDOWS_RAW
-                        sensors.MIN_WINDOWS_RAW = windows
-                        try:
+                    for key in ("before", "after"):
+                        with zero_rules(key == "after"):
                             fit = sensors.drive_gyro_bias(drive, vehicle)
-                        finally:
-                            sensors.MIN_WINDOWS_RAW = saved
                         used = sensors.subtracted_zero(fit)
                         if raw:
                             errs[key].append(math.degrees(used - truth))
@@ -128,13 +147,9 @@ def effect_table(names: list[str]) -> list[str]:
                 vehicle = load_vehicle(drive.meta["vehicle"])
                 for method in METHODS:
                     pair = []
-                    for key, windows in (("before", 10**9), ("after", sensors.MIN_WINDOWS_RAW)):
-                        saved = sensors.MIN_WINDOWS_RAW
-                        sensors.MIN_WINDOWS_RAW = windows
-                        try:
+                    for key in ("before", "after"):
+                        with zero_rules(key == "after"):
                             est = run_method(method, drive, vehicle)
-                        finally:
-                            sensors.MIN_WINDOWS_RAW = saved
                         rmse = metrics(drive, est.series)["beta_rmse_deg"]
                         res[method][key].append((rmse, two_sigma_share(drive, est)))
                         pair.append(rmse)
@@ -162,6 +177,25 @@ COMMA_SEGMENT = COMMA / "b0c9d2329ad1606b_2018-08-02--08-34-47_40"
 CLIPS = ((0.0, 20.0), (0.0, 30.0), (15.0, 45.0), (30.0, 60.0))  # s from the segment's start
 
 
+def clip_table_head(title: str, intro: str) -> list[str]:
+    """Title, ``intro`` and the header of a table of the comma2k19 clips: the zero, then each
+    method's beta RMSE against comma's pose."""
+    return [
+        title,
+        "",
+        f"{intro}  beta RMSE (deg) against comma's pose, rows above 5 m/s.",
+        "",
+        "| clip (s) | zero (deg/s) | " + " | ".join(METHODS) + " |",
+        "|---|---:|" + "---:|" * len(METHODS),
+    ]
+
+
+def clip_of(drive: Any, t0: float, t1: float) -> Any:
+    """The rows of ``drive`` from ``t0`` to ``t1`` s after its start."""
+    start, stop = np.searchsorted(drive.t, drive.t[0] + np.array([t0, t1]))
+    return drive.slice(int(start), int(stop))
+
+
 def comma_table() -> list[str]:
     if not COMMA_SEGMENT.is_dir():
         return []
@@ -169,31 +203,21 @@ def comma_table() -> list[str]:
 
     drive = convert("comma2k19", COMMA_SEGMENT, None, None)
     vehicle = load_vehicle("rav4")
-    lines = [
+    lines = clip_table_head(
         "## (c) Clips of the comma2k19 minute (phone gyro), before -> after",
-        "",
         "The whole minute's zero: "
-        f"{math.degrees(sensors.drive_gyro_bias(drive, vehicle).value):+.2f} deg/s.  "
-        "beta RMSE (deg) against comma's pose, rows above 5 m/s.",
-        "",
-        "| clip (s) | zero (deg/s) | " + " | ".join(METHODS) + " |",
-        "|---|---:|" + "---:|" * len(METHODS),
-    ]
+        f"{math.degrees(sensors.drive_gyro_bias(drive, vehicle).value):+.2f} deg/s.",
+    )
     for t0, t1 in CLIPS:
-        start, stop = np.searchsorted(drive.t, drive.t[0] + np.array([t0, t1]))
-        clip = drive.slice(int(start), int(stop))
+        clip = clip_of(drive, t0, t1)
         zeros, cells = [], {m: [] for m in METHODS}
-        for windows in (10**9, sensors.MIN_WINDOWS_RAW):
-            saved = sensors.MIN_WINDOWS_RAW
-            sensors.MIN_WINDOWS_RAW = windows
-            try:
+        for after in (False, True):
+            with zero_rules(after):
                 zero = sensors.drive_gyro_bias(clip, vehicle)
                 zeros.append(f"{math.degrees(zero.value):+.2f}" if zero.informed else "–")
                 for method in METHODS:
                     est = run_method(method, clip, vehicle)
                     cells[method].append(f"{metrics(clip, est.series)['beta_rmse_deg']:.3f}")
-            finally:
-                sensors.MIN_WINDOWS_RAW = saved
         row = [f"{t0:g}-{t1:g}", " -> ".join(zeros), *(" -> ".join(cells[m]) for m in METHODS)]
         lines.append("| " + " | ".join(row) + " |")
     return [*lines, ""]
@@ -206,8 +230,8 @@ def main() -> None:
     write_result(
         OUT, "The gyro zero on short drives", "benchmarks/gyro_zero_short.py", time.perf_counter() - start,
         f"Scenarios shorter than {SHORT_S:g} s: {', '.join(names)}.  Before: such a drive tells the "
-        "zero only with 5 s of standstill; after: also with 10 s of GNSS course where the fit is at "
-        "least 0.5 deg/s and 4σ from 0.  Truth: the simulator's mean yaw-gyro bias over the drive.",
+        "zero only with 5 s of standstill (nor from its rear wheels, gyro_zero_wheels.md); after: "
+        "also with 10 s of GNSS course where the fit is at least 0.5 deg/s and 4σ from 0.  Truth: the simulator's mean yaw-gyro bias over the drive.",
         body,
     )  # fmt: skip
 

@@ -27,11 +27,11 @@ from typing import Any
 
 import numpy as np
 from compare_methods import SCENARIOS
-from gyro_zero_short import METHODS
+from gyro_zero_short import METHODS, clip_of, clip_table_head, zero_rules
 from results_file import write_result
 
 import sideslip.calibrate.sensors as sensors
-from sideslip.calibrate.result import Fitted, left_alone
+from sideslip.calibrate.result import Fitted
 from sideslip.calibrate.wheel_yaw import wheel_gyro_zero
 from sideslip.drive import Drive
 from sideslip.evaluate import metrics
@@ -47,17 +47,10 @@ COMMA_SEGMENT = COMMA / "b0c9d2329ad1606b_2018-08-02--08-34-47_40"
 CLIPS = ((0.0, 1e9), (0.0, 30.0), (30.0, 60.0))  # s from the segment's start
 
 
-def _untold(_drive: Drive, _track: float) -> Fitted:
-    return left_alone("gyro_bias_rad_s", 0.0, "rad/s", "wheel fallback off (before)")
-
-
 def _before_after(work: Callable[[], Any]) -> tuple[Any, Any]:
-    """``work()`` with the wheel fallback off, then on."""
-    sensors.wheel_gyro_zero = _untold  # type: ignore[assignment]
-    try:
+    """``work()`` with the rear-wheel fallback off, then on."""
+    with zero_rules(wheels=False):
         before = work()
-    finally:
-        sensors.wheel_gyro_zero = wheel_gyro_zero
     return before, work()
 
 
@@ -92,20 +85,14 @@ def comma_table() -> list[str]:
     drive = convert("comma2k19", COMMA_SEGMENT, None, None)
     vehicle = load_vehicle("rav4")
     pose_bias = float(np.nanmean(drive["wz"] - drive["ref_r"]))
-    lines = [
+    lines = clip_table_head(
         "## (a) The comma2k19 minute without its GNSS columns, before -> after",
-        "",
         f"The whole minute's zero from its GNSS course: "
         f"{math.degrees(sensors.drive_gyro_bias(drive, vehicle).value):+.3f} deg/s; the mean of "
-        f"w_z - r against comma's pose: {math.degrees(pose_bias):+.3f} deg/s.  beta RMSE (deg) "
-        "against the pose, rows above 5 m/s.",
-        "",
-        "| clip (s) | zero (deg/s) | " + " | ".join(METHODS) + " |",
-        "|---|---:|" + "---:|" * len(METHODS),
-    ]
+        f"w_z - r against comma's pose: {math.degrees(pose_bias):+.3f} deg/s.",
+    )
     for t0, t1 in CLIPS:
-        start, stop = np.searchsorted(drive.t, drive.t[0] + np.array([t0, t1]))
-        clip = _no_gnss(drive.slice(int(start), int(stop)))
+        clip = _no_gnss(clip_of(drive, t0, t1))
         zeros = _before_after(lambda c=clip: sensors.drive_gyro_bias(c, vehicle))
         rmse = _before_after(lambda c=clip: _rmse(c, vehicle))
         span = "whole" if t1 > 1e8 else f"{t0:g}-{t1:g}"
