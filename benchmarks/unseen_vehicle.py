@@ -1,13 +1,14 @@
-"""Issue 15 point 4 on a car no table uses: CommonRoad's Ford Escort (parameter set 1).
+"""Issue 15 point 4 on a car no table uses: CommonRoad's Ford Escort (parameter set 1), and
+with ``--params vw_vanagon`` its VW Vanagon (set 3).
 
 The five ``cr_*`` manoeuvres (same steering, speed, friction and GNSS multipath bursts as in
-compare_methods.md) driven by CommonRoad's multi-body model with the Ford Escort's parameters,
-which no scenario, test or default was measured on: front-heavy (63 % on the front axle), roll
-gain 0.016 rad per m/s^2.  Each drive with three receivers (the scenario's 10 Hz GNSS with
+compare_methods.md) driven by CommonRoad's multi-body model with another car's parameters,
+which no scenario, test or default was measured on.  Each drive with three receivers (the scenario's 10 Hz GNSS with
 Doppler; positions only at 20 Hz, 50 ms late, antenna 0.5 m ahead of where the file says; no
 GNSS) and two vehicle files (the one derived from the parameter set, and ``rough_file`` of it).
 Seed 7 (the tables use 0).  Beta RMSE in degrees on rows faster than 5 m/s, the best other
-registered method, and the 2-sigma shares.  Writes ``benchmarks/results/unseen_vehicle.md``.
+registered method, and the 2-sigma shares.  Writes ``benchmarks/results/unseen_vehicle.md``
+(the Escort) or ``unseen_vehicle_<params>.md``.
 Run: ``.venv/bin/python benchmarks/unseen_vehicle.py [--seed 7] [--params ford_escort]``.
 """
 
@@ -23,11 +24,12 @@ from pathlib import Path
 import numpy as np
 from compare_methods import FILES, POSITIONS_ONLY, two_sigma_share
 
+from sideslip.calibrate.roll import file_roll_gradient
 from sideslip.evaluate import metrics
 from sideslip.methods.registry import all_methods, run_method, why_not
 from sideslip.simulate import SensorConfig
 from sideslip.simulate.commonroad import CR_SCENARIOS, commonroad_drive, commonroad_truth
-from sideslip.vehicle import load_vehicle
+from sideslip.vehicle import Vehicle, load_vehicle
 
 OUT = Path(__file__).parent / "results" / "unseen_vehicle.md"
 RECEIVERS = ("doppler", "positions", "none")
@@ -50,6 +52,15 @@ def _drive(name: str, params: str, seed: int, receiver: str) -> object:
     return drive
 
 
+def _car(vehicle: Vehicle) -> str:
+    """One sentence on what sets the car apart: axle loads and the file's roll gain."""
+    front = vehicle.lr / (vehicle.lf + vehicle.lr)
+    return (
+        f"This car ({vehicle.name}): {100 * front:.0f} % of its weight on the front axle, the file's "
+        f"roll gain {file_roll_gradient(vehicle):.3f} rad per m/s^2."
+    )
+
+
 def _finite(est: object) -> bool:
     return all(bool(np.all(np.isfinite(np.asarray(v)))) for v in est.series.values())  # type: ignore[attr-defined]
 
@@ -61,7 +72,7 @@ def run(params: str, seed: int) -> str:
         f"# fused on a car no table uses: CommonRoad {params}",
         "",
         f"Measured {dt.datetime.now(dt.UTC):%Y-%m-%d %H:%M} UTC by `benchmarks/unseen_vehicle.py`, "
-        f"seed {seed}.  " + __doc__.split("\n\n")[1].replace("\n", " "),
+        f"seed {seed}.  " + __doc__.split("\n\n")[1].replace("\n", " ") + "  " + _car(base),
         "",
         "| manoeuvre | receiver | file | max abs beta | fused | 2 sigma | fused_filter | 2 sigma "
         "| best other method | its beta RMSE | fused / best |",
@@ -124,12 +135,13 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--seed", type=int, default=7)
     parser.add_argument("--params", default="ford_escort", help="CommonRoad parameter set")
-    parser.add_argument("--out", type=Path, default=OUT)
+    parser.add_argument("--out", type=Path, default=None, help="default: unseen_vehicle[_<params>].md")
     args = parser.parse_args()
     text = run(args.params, args.seed)
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(text)
-    print(f"wrote {args.out}")
+    out = args.out or (OUT if args.params == "ford_escort" else OUT.with_name(f"unseen_vehicle_{args.params}.md"))
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(text)
+    print(f"wrote {out}")
 
 
 if __name__ == "__main__":
