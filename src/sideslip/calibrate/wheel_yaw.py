@@ -22,7 +22,7 @@ velocity", SAE 2001-01-1064); the drive's own gyro zero from it is what
 standstill do not tell the zero.
 
 Measured on the comma2k19 highway minute with its GNSS removed (phone gyro, no standstill):
--3.89 deg/s against the reference pose's -3.87 (benchmarks/results/gyro_zero_wheels.md).
+-3.86 +- 0.06 deg/s against -3.88 from the reference pose (benchmarks/results/gyro_zero_wheels.md).
 """
 
 from __future__ import annotations
