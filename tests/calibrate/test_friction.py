@@ -11,7 +11,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from sideslip.calibrate.friction import axle_slip, drive_friction
+from sideslip.calibrate.friction import DUGOFF_RATIO_MAX, axle_slip, drive_friction
 from sideslip.evaluate import metrics
 from sideslip.methods.fused import roll_gain
 from sideslip.methods.registry import run_method
@@ -31,6 +31,18 @@ def test_axle_slip_inverts_the_estimators_axle_curve(shape: float) -> None:
     np.testing.assert_allclose(axle_slip(force, c, f_max, shape), z, rtol=1e-7, atol=1e-9)
     beyond = axle_slip(np.array([f_max, -1.5 * f_max]), c, f_max, shape)
     np.testing.assert_allclose(beyond, [z_peak, -z_peak], rtol=1e-12)
+
+
+def test_axle_slip_inverts_the_dugoff_curve_up_to_its_cap() -> None:
+    """Analytic: Dugoff's curve reaches the limit only at infinite slip, so forces up to
+    DUGOFF_RATIO_MAX of it invert exactly (both branches) and beyond take the slip there."""
+    c, f_max = 60.0, 4.0
+    z_cap = f_max / (4.0 * c * (1.0 - DUGOFF_RATIO_MAX))
+    z = np.linspace(-0.999 * z_cap, 0.999 * z_cap, 401)
+    force = np.array([axle_lateral_force(float(v), c, f_max, -1.0)[0] for v in z])
+    np.testing.assert_allclose(axle_slip(force, c, f_max, -1.0), z, rtol=1e-7, atol=1e-9)
+    beyond = axle_slip(np.array([f_max, -1.5 * f_max]), c, f_max, -1.0)
+    np.testing.assert_allclose(beyond, [z_cap, -z_cap], rtol=1e-12)
 
 
 def _fit(name: str, seed: int = 0, scale: float = 1.0):  # type: ignore[no-untyped-def]

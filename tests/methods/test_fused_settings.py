@@ -31,7 +31,7 @@ def test_a_bad_setting_is_one_clear_error():
     names it."""
     with pytest.raises(ValueError, match=r"FusedSettings.force_noise_sigma = 0.0: expected a finite number > 0"):
         FusedSettings(force_noise_sigma=0.0)
-    with pytest.raises(ValueError, match=r"axle_curve_shape = 0.5: expected 0 \(brush curve\) or a Magic"):
+    with pytest.raises(ValueError, match=r"axle_curve_shape = 0.5: expected 0 \(brush curve\), -1 \(Dugoff curve\) or a Magic"):
         FusedSettings(axle_curve_shape=0.5)
     with pytest.raises(ValueError, match=r"FusedSettings.wheel_slip_stiffness = nan: expected"):
         FusedSettings(wheel_slip_stiffness=float("nan"))

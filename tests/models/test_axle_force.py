@@ -9,6 +9,7 @@ import pytest
 
 from sideslip.models.axle_force import (
     axle_lateral_force,
+    dugoff_force,
     fiala_force,
     lateral_force,
     magic_force,
@@ -74,7 +75,28 @@ def test_magic_curve_is_linear_at_zero_holds_its_peak_and_has_exact_derivatives(
         assert df == pytest.approx((magic_force(z, C, F + h, s)[0] - magic_force(z, C, F - h, s)[0]) / (2 * h), rel=1e-5)
 
 
+def test_dugoff_curve_is_linear_to_half_the_limit_then_approaches_it() -> None:
+    """Dugoff 1970: F = C z up to |z| = F / (2 C) (exactly linear there, where the brush
+    curve's secant is already 1 - u + u^2 / 3 = 0.84 at u = 1/6 of its sliding slip),
+    F - F^2 / (4 C |z|) beyond (at 10x the knee: 0.95 F), odd, C1 at the knee, and the
+    analytic derivatives equal central differences on both branches."""
+    knee = F / (2 * C)
+    for z in (1e-6, 0.5 * knee, knee):
+        assert dugoff_force(z, C, F)[0] == pytest.approx(C * z, rel=1e-12)
+        assert dugoff_force(-z, C, F)[0] == pytest.approx(-C * z, rel=1e-12)
+    assert fiala_force(knee, C, F)[0] < 0.85 * C * knee  # brush: already curved at the knee
+    assert dugoff_force(10 * knee, C, F)[0] == pytest.approx(0.95 * F)
+    h = 1e-7
+    assert dugoff_force(knee + h, C, F)[1] == pytest.approx(C, rel=1e-5)  # slope continuous
+    for z in (-3 * knee, -0.4 * knee, 0.7 * knee, 1.5 * knee, 8 * knee):
+        _, dz, dc, df = dugoff_force(z, C, F)
+        assert dz == pytest.approx((dugoff_force(z + h, C, F)[0] - dugoff_force(z - h, C, F)[0]) / (2 * h), rel=1e-5)
+        assert dc == pytest.approx((dugoff_force(z, C + h, F)[0] - dugoff_force(z, C - h, F)[0]) / (2 * h), rel=1e-5, abs=1e-9)
+        assert df == pytest.approx((dugoff_force(z, C, F + h)[0] - dugoff_force(z, C, F - h)[0]) / (2 * h), rel=1e-5, abs=1e-9)
+
+
 def test_axle_curve_dispatches_on_the_shape() -> None:
     z = 0.4 * F / C
     assert axle_lateral_force(z, C, F, 0.0) == fiala_force(z, C, F)
     assert axle_lateral_force(z, C, F, 1.3) == magic_force(z, C, F, 1.3)
+    assert axle_lateral_force(3 * z, C, F, -1.0) == dugoff_force(3 * z, C, F)

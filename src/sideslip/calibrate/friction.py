@@ -71,18 +71,25 @@ CORRELATION_S = 1.0  # s: one independent residual per this long
 FRONT_SCALE = (0.5, 1.5)  # the front axle's stiffness scale allowed as nuisance
 MIN_ROWS_S = 5.0  # s of usable rows below which the drive is not used
 FLOOR_PERCENTILE = 99.5
+DUGOFF_RATIO_MAX = 0.99  # Dugoff's curve reaches the limit only at infinite slip
 
 
 def axle_slip(f: FloatArray, c: float, f_max: FloatArray | float, shape: float = 0.0) -> FloatArray:
     """``tan(alpha)`` an axle needs for the lateral force ``f`` (per unit mass, m/s^2), the
     inverse of :func:`sideslip.models.axle_force.axle_lateral_force`: cornering stiffness
     ``c`` (m/s^2 per unit ``tan alpha``), force limit ``f_max`` = mu g times the load share.
-    Brush curve (``shape <= 0``): ``F / f_max = 1 - (1 - |u|)^3`` with ``u = c z / (3 f_max)``;
-    Magic Formula with shape factor ``S``: ``z = tan(asin(F / f_max) / S) S f_max / c``.
-    Forces at or beyond the limit give the slip at the limit."""
+    Brush curve (``shape == 0``): ``F / f_max = 1 - (1 - |u|)^3`` with ``u = c z / (3 f_max)``;
+    Dugoff (``shape < 0``): ``z = F / c`` up to half the limit, ``f_max^2 / (4 c (f_max - F))``
+    beyond, with the force capped at :data:`DUGOFF_RATIO_MAX` of the limit (the curve reaches
+    it at infinite slip); Magic Formula with shape factor ``S``:
+    ``z = tan(asin(F / f_max) / S) S f_max / c``.  Forces at or beyond the limit give the slip
+    at the limit."""
     ratio = np.minimum(np.abs(f) / f_max, 1.0)
-    if shape <= 0.0:
+    if shape == 0.0:
         z = (1.0 - np.cbrt(1.0 - ratio)) * 3.0 * f_max / c
+    elif shape < 0.0:
+        r = np.minimum(ratio, DUGOFF_RATIO_MAX)
+        z = np.where(r <= 0.5, r * f_max / c, f_max / (4.0 * c * (1.0 - r)))
     else:
         z = np.tan(np.arcsin(ratio) / shape) * shape * f_max / c
     return np.asarray(np.sign(f) * z, dtype=float)
@@ -121,7 +128,7 @@ def drive_friction(
     docstring), or not informed (the value nan) where the drive does not decide it.
     ``roll_gain`` (rad per m/s^2): the suspension's roll gain, whose gravity term is taken out
     of the lateral acceleration as the estimator takes it out; ``shape``: the axle curve
-    (0 brush, > 1 Magic Formula shape factor); ``gyro_zero``: the drive's gyro zero if the
+    (0 brush, -1 Dugoff, > 1 Magic Formula shape factor); ``gyro_zero``: the drive's gyro zero if the
     caller has it."""
     name = "mu"
     if "steer" not in drive or "wz" not in drive or "ay" not in drive:

@@ -276,7 +276,14 @@ class FusedSettings:
     # 0.063 -> 0.053 / 0.061; positions only 0.081 / 0.124 -> 0.086 / 0.113; no GNSS
     # 0.077 / 0.146 -> 0.078 / 0.131; Revs lap 0.245 -> 0.232; but on CommonRoad's tyres
     # with the right file cr_step_steer 0.020 -> 0.031 and cr_limit_ramp 0.31 -> 0.41 without
-    # GNSS, and the causal filter's 2-sigma share 0.96 -> 0.88 (cr_limit_ramp): not the default
+    # GNSS, and the causal filter's 2-sigma share 0.96 -> 0.88 (cr_limit_ramp): not the default.
+    # -1: Dugoff's curve (linear to half the limit, then F - F^2 / (4 C z)), measured
+    # 2026-12-06 over the same 16 scenarios at seed 0 (right / soft / rough file): Doppler
+    # 0.042 / 0.050 / 0.053 -> 0.047 / 0.051 / 0.055; positions only 0.073 / 0.139 / 0.130 ->
+    # 0.089 / 0.117 / 0.111; no GNSS 0.077 / 0.146 / 0.139 -> 0.090 / 0.127 / 0.122; Revs lap
+    # 0.245 -> 0.209 (comma minute 0.092 either); it needs more slip than the brush near the
+    # limit (at 90 % of it 2.5 F / C against 1.6), and CommonRoad's limit ramp without GNSS
+    # went 0.309 -> 0.579, step_steer 0.019 -> 0.072: not the default either
     axle_curve_shape: float = 0.0
     # GNSS Doppler against the inertial propagation (fused_engine._doppler_check): an epoch
     # that disagrees with the velocity the accelerometers carried forward from the last
@@ -310,10 +317,10 @@ class FusedSettings:
             if isinstance(value, bool):
                 continue
             if f.name == "axle_curve_shape":
-                if not (math.isfinite(value) and (value == 0.0 or value > 1.0)):
+                if not (math.isfinite(value) and (value == 0.0 or value == -1.0 or value > 1.0)):
                     raise ValueError(
-                        f"FusedSettings.axle_curve_shape = {value!r}: expected 0 (brush curve) or a "
-                        "Magic Formula shape factor > 1"
+                        f"FusedSettings.axle_curve_shape = {value!r}: expected 0 (brush curve), -1 "
+                        "(Dugoff curve) or a Magic Formula shape factor > 1"
                     )
                 continue
             zero_ok = f.name in ("step_s", "offset_level_share")

@@ -15,6 +15,10 @@ which is linear (``C z``) at small slip, saturates smoothly at ``F``, and has th
 ``dF_y/dz = C (1 - |z| / z_sl)^2``.  Forces here are per unit vehicle mass (m/s^2): ``C`` in
 m/s^2 per unit ``z`` (N/rad over kg) and ``F`` = mu g times the axle's static load share.
 
+Two other curves are options of the estimator (``FusedSettings.axle_curve_shape``): a
+simplified Magic Formula (:func:`magic_force`) and Dugoff's (:func:`dugoff_force`), both more
+linear than the brush at moderate utilisation.
+
 The model is the estimator's (``fused``) and not the simulator's: the simulator's tyres are
 Pacejka's Magic Formula with load transfer, so tests never grade the estimator on its own
 tyre curve.
@@ -78,11 +82,31 @@ def magic_force(z: float, c: float, f_max: float, shape: float) -> tuple[float, 
 
 
 @numba.njit(cache=True)
+def dugoff_force(z: float, c: float, f_max: float) -> tuple[float, float, float, float]:
+    """Dugoff's axle force (pure lateral slip) and its derivatives.
+
+    Dugoff, Fancher & Segel, SAE 700377 (1970): ``F_y = c z f(lam)``, ``lam = f_max / (2 c |z|)``,
+    ``f = 1`` for ``lam >= 1`` else ``(2 - lam) lam``; so linear up to half the limit
+    (``|z| <= f_max / (2 c)``), beyond it ``F_y = sign(z) (f_max - f_max^2 / (4 c |z|))``,
+    which approaches ``f_max`` with a slope that never reaches 0 (C1 at the knee).  Returns
+    ``(F_y, dF_y/dz, dF_y/dc, dF_y/df_max)``.
+    """
+    az = abs(z)
+    if 2.0 * c * az <= f_max:
+        return c * z, c, z, 0.0
+    s = 1.0 if z >= 0.0 else -1.0
+    q = f_max * f_max / (4.0 * c * az)
+    return s * (f_max - q), q / az, s * q / c, s * (1.0 - 2.0 * q / f_max)
+
+
+@numba.njit(cache=True)
 def axle_lateral_force(z: float, c: float, f_max: float, shape: float) -> tuple[float, float, float, float]:
-    """The estimator's axle curve: :func:`fiala_force` when ``shape <= 0``, else
-    :func:`magic_force` with that shape factor."""
-    if shape <= 0.0:
+    """The estimator's axle curve: :func:`fiala_force` when ``shape == 0``, :func:`dugoff_force`
+    when ``shape < 0``, else :func:`magic_force` with that shape factor."""
+    if shape == 0.0:
         return fiala_force(z, c, f_max)
+    if shape < 0.0:
+        return dugoff_force(z, c, f_max)
     return magic_force(z, c, f_max, shape)
 
 
