@@ -36,8 +36,11 @@ browser:
 		     "(sudo apt-get install chromium, then make test-browser)"; \
 	fi
 
-# the kernels again after a source change (a few seconds when the cache is warm)
+# the kernels again after a source change.  numba keys each cached kernel on its own file
+# only: a kernel that calls a changed kernel of another module (fused_measurements calling
+# models.axle_force) keeps its stale machine code, so every cache is dropped first
 warm: $(STAMP)
+	find src -name '*.nbi' -delete -o -name '*.nbc' -delete
 	$(BIN)/python -m sideslip.warmup --jobs 2
 
 # the install and the browser side by side (pip and apt each mostly wait on one core)
