@@ -131,12 +131,19 @@ def test_an_accelerometer_offset_stays_inside_beta_std(scenario):
     assert two_sigma_share(drive, est) >= 0.90
     assert est.params["beta_std_accel_offset_deg"] > 0.0
     # the drive's lateral offset level (offset_level_share) would carry it too: both off
+    # (and the offset read from the curves, fused_accel_offset, which a 1e-9 prior overrules)
     without = run_method(
-        "fused", drive, vehicle, settings={"accel_offset_sigma": 1e-9, "offset_level_share": 0.0}
-    )
+        "fused", drive, vehicle, settings={"accel_offset_sigma": 1e-9, "offset_level_share": 0.0,
+                                           "identify_accel_offset": False},
+    )  # fmt: skip
     assert two_sigma_share(drive, without) < 0.90
-    level_only = run_method("fused", drive, vehicle, settings={"accel_offset_sigma": 1e-9})
+    level_only = run_method(
+        "fused", drive, vehicle, settings={"accel_offset_sigma": 1e-9, "identify_accel_offset": False}
+    )
     assert two_sigma_share(drive, level_only) >= 0.90
+    if est.params["accel_offset_y_informed"]:  # urban_highway's curves read the offset itself
+        truth = 0.25 + drive.meta["truth_sensor"]["ay_bias_level"]
+        assert abs(est.params["accel_offset_y_m_s2"] - truth) < 2.0 * est.params["accel_offset_y_m_s2_sigma"]
 
 
 def test_the_doppler_check_does_not_blame_the_receiver_for_a_bank_ramp():

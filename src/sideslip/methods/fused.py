@@ -94,7 +94,11 @@ its states stay causal, its two noise levels are read from the whole drive, as a
 gain and Doppler latency (calibrations of the car and the receiver;
 ``whole_drive_calibration=false`` keeps it strictly causal).
 ``beta_std`` then carries the slip offset of an ``accel_offset_sigma`` accelerometer offset,
-which the random walk, white, does not.  With Doppler and fixes the smoother also checks the
+which the random walk, white, does not.  Where five curves or more decide it, the offset
+itself comes out of the axle forces and the bank (``identify_accel_offset``,
+:mod:`sideslip.methods.fused_accel_offset`: seed 000's heading closure in curves, which
+tells a reading's offset from a road's crossfall through the yaw gyro's tilt), and its
+posterior sigma replaces the prior's in ``beta_std``.  With Doppler and fixes the smoother also checks the
 file's antenna position (``check_doppler_lever``, :mod:`sideslip.methods.fused_lever`): an
 antenna ``dl_x`` ahead of where the file says adds ``r dl_x`` to the Doppler's lateral
 velocity, which reads as slip; a pass without the tyres finds ``dl_x``, and the antenna is
@@ -127,6 +131,7 @@ from sideslip.filters.consistency import nis_consistency
 from sideslip.gnss_latency import identify_doppler_latency, identify_latency
 from sideslip.imu_lever import specific_force_at_cg
 from sideslip.methods import fused_engine as eng
+from sideslip.methods.fused_accel_offset import AccelOffset, lateral_accel_offset
 from sideslip.methods.fused_lever import check_lever, without_tyres
 from sideslip.methods.fused_settings import (
     FusedSettings,
@@ -489,6 +494,32 @@ def _config(
     return cfg
 
 
+def _accel_offset(
+    drive: Drive, vehicle: Vehicle, nz: FusedSettings, smooth: bool, has_vel: bool,
+    smoother: Estimate | None,
+) -> AccelOffset:  # fmt: skip
+    """The lateral reading's offset for the axle forces (:mod:`.fused_accel_offset`): with
+    GNSS Doppler and ``identify_accel_offset``; the causal filter only with
+    ``whole_drive_calibration`` (a calibration read from the whole drive), and from the
+    smoother's run where it has one."""
+    prior = nz.accel_offset_sigma
+    if not nz.identify_accel_offset:
+        return AccelOffset(0.0, prior, False, "off (FusedSettings.identify_accel_offset)")
+    if not has_vel:
+        return AccelOffset(0.0, prior, False, "no GNSS Doppler: the curves' heading closure is not measured")
+    if not smooth and not nz.whole_drive_calibration:
+        return AccelOffset(0.0, prior, False, "causal without whole_drive_calibration")
+    if smoother is not None and "accel_offset_y_m_s2" in smoother.params:
+        p = smoother.params
+        scan = p["accel_offset_y_scan_m_s2"]
+        return AccelOffset(
+            float(p["accel_offset_y_m_s2"]), float(p["accel_offset_y_m_s2_sigma"]),
+            bool(p["accel_offset_y_informed"]), str(p["accel_offset_y_note"]),
+            None if scan is None else (float(scan[0]), float(scan[1])),
+        )  # fmt: skip
+    return lateral_accel_offset(drive, vehicle, prior)
+
+
 def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings | None = None) -> Estimate:
     """Run the fused EKF (and RTS smoother when ``smooth``); see the module docstring."""
     nz = settings or FusedSettings()
@@ -594,7 +625,11 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
                 "of position noise"
             )
     lp = _zero_phase_low_pass if tyres_only else _low_pass
-    fy_lp = lp(t, ay * (1.0 - G * k_phi), tau_f)
+    # the reading's offset the tyres do not carry (bias, mounting roll): from the curves'
+    # heading closure where the drive decides it (fused_accel_offset), else 0 and the prior
+    offset_y = _accel_offset(drive, vehicle, nz, smooth, has_vel, smoother_lever)
+    params_offset = offset_y.params()
+    fy_lp = lp(t, (ay - offset_y.value) * (1.0 - G * k_phi), tau_f)
     r_dot = _backward_rate(t, wz)
     r_dot_lp = lp(t, r_dot, tau_f) if (nz.yaw_acceleration or tyres_only) else np.zeros(n)
     wb = geom[0] + geom[1]
@@ -810,7 +845,7 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     if rebuild:
         wz, wy = _hold(drive, "wz"), _hold(drive, "wy")
         ax, ay = _accel_at_cg(drive, vehicle, _hold(drive, "wx"), wy, wz, causal=not smooth)
-        fy_lp = lp(t, ay * (1.0 - G * k_phi), tau_f)  # as above
+        fy_lp = lp(t, (ay - offset_y.value) * (1.0 - G * k_phi), tau_f)  # as above
         if smooth:
             del ax, ay
     if smooth:  # linear interpolation of the smoothed nodes
@@ -828,6 +863,13 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     )  # fmt: skip
     params = dict(est.params)
     series = dict(est.series)
+    params.update(params_offset)
+    if offset_y.informed:
+        # c_y holds g sin(bank) plus the reading's offset: the road's bank is the rest
+        sin_bank = np.clip(np.sin(series["bank"]) - offset_y.value / G, -0.6, 0.6)
+        bank_road = np.arcsin(sin_bank)
+        series["roll"] = series["roll"] + (bank_road - series["bank"])
+        series["bank"] = bank_road
     # the learned rear stiffness against a straight line through the estimate's own slip:
     # the difference is the tyre curve's part of its sigma (sideslip.methods.fused_stiffness)
     secant = rear_secant(
@@ -874,6 +916,9 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
         moving = np.abs(series["vx"]) > nz.axle_min_speed
         level = G * abs(float(np.median(np.sin(series["bank"][moving])))) if moving.any() else 0.0
         sigma_offset = math.hypot(nz.accel_offset_sigma, nz.offset_level_share * level)
+        if offset_y.informed:
+            # the curves' heading closure told the offset (a tilted mount too) from the bank
+            sigma_offset = offset_y.sigma
         offset = sigma_offset * vehicle.mass * vehicle.lf / vehicle.wheelbase / (vehicle.cr * scale)
         params["accel_offset_level_m_s2"] = level
         series["beta_std"] = np.hypot(series["beta_std"], offset)

@@ -155,6 +155,18 @@ class FusedSettings:
     # with equal priors on both (about 1.5 deg each), the tilt's posterior mean is half the
     # level (0: the offset's sigma is accel_offset_sigma alone)
     offset_level_share: float = 0.5
+    # with GNSS Doppler, the lateral reading's offset from seed 000's heading closure in
+    # curves (fused_accel_offset: doppler_slip's scan, with accel_offset_sigma as its prior),
+    # taken out of the axle forces and the bank, its posterior sigma in beta_std, where the
+    # scan decides it (five curves or more pinning it to 0.15 m/s^2).  Measured 2026-12-06:
+    # urban_highway seeds 0-3 beta RMSE 0.024 / 0.027 / 0.025 / 0.019 -> 0.014 / 0.025 /
+    # 0.018 / 0.016 deg (30 %-soft file 0.050 / 0.037 / 0.041 / 0.044 -> 0.033 / 0.037 /
+    # 0.032 / 0.029), bank RMSE 0.29 / 0.31 / 0.30 / 0.19 -> 0.09 / 0.28 / 0.04 / 0.05 deg;
+    # no other scenario of the comparison decides it (urban_course, rough file: 0.054 ->
+    # 0.057).  Cost where the gyro shows five curves: one doppler_slip run (the 1 h bench
+    # drive, whose curves do not decide it: 168k -> 117k samples/s, 137 -> 166 MB peak;
+    # fused_filter 94k -> 82k, 151 -> 176 MB; bench.md)
+    identify_accel_offset: bool = True
     axle_min_speed: float = 3.0  # m/s: below this the slip angles are ill-defined
     # below axle_min_speed (pulling away, parking, reversing) the rear axle's sideways
     # velocity v_y - l_r r stands in for the slip angle's relation: it is -|v_x| f_r / C_r
