@@ -81,3 +81,28 @@ def test_the_causal_filter_takes_the_smoothers_offset() -> None:
     assert causal["accel_offset_y_informed"] is True
     strict = run_method("fused_filter", drive, vehicle, {"whole_drive_calibration": False}).params
     assert strict["accel_offset_y_note"] == "causal without whole_drive_calibration"
+
+
+def test_a_scan_that_fails_keeps_the_prior_and_a_flipped_gyro_is_one_clear_error(monkeypatch) -> None:
+    """The scan is a refinement: where its heading fit fails the offset stays the prior's and
+    the note says so.  A yaw gyro turning against the GNSS course stops fused as it stops
+    doppler_slip: one error naming the column."""
+    from dataclasses import replace
+
+    import sideslip.methods.doppler_slip as ds
+    from sideslip.errors import InputError
+
+    drive = sim_drive("urban_highway", 0)
+    vehicle = load_vehicle(drive.meta["vehicle"])
+    flipped = replace(drive, data={**drive.data, "wz": -np.asarray(drive.data["wz"])})
+    with pytest.raises(InputError, match="yaw rate turns opposite to the GNSS course") as err:
+        lateral_accel_offset(flipped, vehicle, 0.25)
+    assert err.value.column == "wz"
+
+    def broken(*args: object, **kwargs: object) -> None:
+        raise RuntimeError("heading fit did not run")
+
+    monkeypatch.setattr(ds, "run_doppler_slip", broken)
+    offset = lateral_accel_offset(drive, vehicle, 0.25)
+    assert not offset.informed and offset.value == 0.0 and offset.sigma == 0.25
+    assert offset.note == "heading-closure scan failed (heading fit did not run); prior 0 +- 0.25 m/s^2"

@@ -57,6 +57,7 @@ BIAS_RW = 1.0e-4  # rad/s change of the offset per knot interval, 1-sigma (MEMS 
 BIAS_PRIOR = 0.05  # rad/s, 1-sigma prior on the offset level (about 3 deg/s)
 SCALE_PRIOR = 0.02  # 1-sigma prior on the gyro scale correction s
 HEADING_CORR_S = 1.0  # s: one independent course residual per this time (for the 1-sigma of s)
+SIGN_CHECK_SPACING_S = 1.0  # s: course changes over this long judge the gyro's sign (course noise)
 
 
 @dataclass(frozen=True)
@@ -121,26 +122,36 @@ def course_samples(
 
 
 def check_yaw_rate_sign(
-    t: FloatArray, wz: FloatArray, samples: CourseSamples, path: str, min_turn_rad: float = 1.5
+    t: FloatArray, wz: FloatArray, samples: CourseSamples, path: str, min_turn_rad: float = 1.5,
+    spacing_s: float = SIGN_CHECK_SPACING_S,
 ) -> float | None:
     """Fail when the yaw gyro turns the opposite way to the GNSS course.
 
-    Compares course changes between consecutive fresh samples (at most 1 s apart) with the
-    integrated ``wz`` over the same interval.  Returns their correlation, or None when the drive
-    turns too little (total |course change| below ``min_turn_rad``) to judge.  Raises
-    :class:`InputError` naming column ``wz`` when the correlation is below -0.5.
+    Compares course changes between fresh samples ``spacing_s`` or more apart (at most 2.5x
+    that) with the integrated ``wz`` over the same interval: their correlation with both means
+    removed (a raw gyro's bias adds the same turn to every interval).  Returns it, or None
+    when the drive turns too little (total |course change| below ``min_turn_rad``) to judge.
+    Raises :class:`InputError` naming column ``wz`` when the correlation is below -0.5.
+    Over consecutive 10 Hz epochs a gentle drive's course noise hid the sign (a flipped gyro
+    on the simulated highway: -0.49); over 1 s it reads -0.98.
     """
     rows = samples.rows
     if rows.size < 3:
         return None
-    dt = np.diff(t[rows])
-    dcourse = wrap_angle(np.diff(samples.course))
+    tc = t[rows]
+    keep = [0]
+    for i in range(1, rows.size):  # one sample per spacing_s
+        if tc[i] - tc[keep[-1]] >= spacing_s:
+            keep.append(i)
+    k = np.asarray(keep)
+    dt = np.diff(tc[k])
+    dcourse = wrap_angle(np.diff(samples.course[k]))
     turned = _cumtrapz(t, np.nan_to_num(wz))
-    dgyro = np.diff(turned[rows])
-    ok = (dt <= 1.0) & (np.abs(dcourse) < 0.5)
-    if ok.sum() < 3 or np.abs(dgyro[ok]).sum() < min_turn_rad:
+    dgyro = np.diff(turned[rows[k]])
+    ok = (dt <= 2.5 * max(spacing_s, 0.4)) & (np.abs(dcourse) < 0.5)
+    if ok.sum() < 3 or np.abs(dcourse[ok]).sum() < min_turn_rad:
         return None
-    a, b = dcourse[ok], dgyro[ok]
+    a, b = dcourse[ok] - dcourse[ok].mean(), dgyro[ok] - dgyro[ok].mean()
     denom = np.sqrt(np.sum(a * a) * np.sum(b * b))
     corr = float(np.sum(a * b) / denom) if denom > 0 else 0.0
     if corr < -0.5:

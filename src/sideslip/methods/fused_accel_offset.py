@@ -98,7 +98,12 @@ def lateral_accel_offset(drive: Drive, vehicle: Vehicle, prior_sigma: float) -> 
         return AccelOffset(0.0, prior_sigma, False, note)
     from sideslip.methods.doppler_slip import run_doppler_slip  # the scan and its heading fit
 
-    p = run_doppler_slip(drive, vehicle).params
+    try:
+        p = run_doppler_slip(drive, vehicle).params
+    except (RuntimeError, ValueError, ArithmeticError, np.linalg.LinAlgError) as err:
+        # the scan is a refinement: a drive its heading fit cannot take keeps the prior (a
+        # gyro turning against the course is an InputError and stops every method alike)
+        return AccelOffset(0.0, prior_sigma, False, f"heading-closure scan failed ({err}); {prior}")
     if not p.get("ay_bias_applied", False):
         why = str(p.get("ay_bias_note", "")) or "not decided"
         return AccelOffset(0.0, prior_sigma, False, f"heading-closure scan: {why}; {prior}")
