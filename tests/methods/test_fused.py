@@ -519,7 +519,8 @@ def test_a_tilted_imu_mount_widens_beta_std_by_what_the_drive_cannot_tell_from_b
 def test_a_gyro_flipped_against_the_gnss_course_is_one_clear_error(receiver):
     """demo with its yaw gyro's sign flipped (a z axis mounted down): the course over 1 s
     turns against the gyro (correlation -0.99 with Doppler), which is bad input, named in one
-    line, rather than a drive fused would fit with tyres and a gyro scale of -1."""
+    line by every method (registry.run_method), rather than a drive fused would fit with tyres
+    and a gyro scale of -1."""
     from dataclasses import replace
 
     from sideslip.errors import InputError
@@ -529,8 +530,9 @@ def test_a_gyro_flipped_against_the_gnss_course_is_one_clear_error(receiver):
         drive = replace(drive, data={k: v for k, v in drive.data.items() if k not in ("gnss_ve", "gnss_vn")})
     flipped = replace(drive, data={**drive.data, "wz": -np.asarray(drive.data["wz"])})
     vehicle = load_vehicle(drive.meta["vehicle"])
-    with pytest.raises(InputError, match="column 'wz': yaw rate turns opposite to the GNSS course") as err:
-        run_method("fused", flipped, vehicle)
-    assert "\n" not in str(err.value)
+    for method in ("fused", "kkf", "fg_batch", "obs_bicycle"):  # every method (run_method)
+        with pytest.raises(InputError, match="column 'wz': yaw rate turns opposite to the GNSS course") as err:
+            run_method(method, flipped, vehicle)
+        assert "\n" not in str(err.value)
     est = run_method("fused", drive, vehicle)  # the same drive with its gyro as mounted runs
     assert np.isfinite(est["beta"]).all()

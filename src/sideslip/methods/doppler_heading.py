@@ -58,6 +58,9 @@ BIAS_PRIOR = 0.05  # rad/s, 1-sigma prior on the offset level (about 3 deg/s)
 SCALE_PRIOR = 0.02  # 1-sigma prior on the gyro scale correction s
 HEADING_CORR_S = 1.0  # s: one independent course residual per this time (for the 1-sigma of s)
 SIGN_CHECK_SPACING_S = 1.0  # s: course changes over this long judge the gyro's sign (course noise)
+# intervals the correlation needs: two unrelated series pass -0.5 by chance with probability
+# about 1 % at 20 (a flipped gyro reads -0.96 or lower on every drive that turns)
+SIGN_CHECK_MIN_INTERVALS = 20
 
 
 @dataclass(frozen=True)
@@ -130,7 +133,8 @@ def check_yaw_rate_sign(
     Compares course changes between fresh samples ``spacing_s`` or more apart (at most 2.5x
     that) with the integrated ``wz`` over the same interval: their correlation with both means
     removed (a raw gyro's bias adds the same turn to every interval).  Returns it, or None
-    when the drive turns too little (total |course change| below ``min_turn_rad``) to judge.
+    when the drive turns too little to judge (total |course change| below ``min_turn_rad``,
+    or fewer than :data:`SIGN_CHECK_MIN_INTERVALS` intervals).
     Raises :class:`InputError` naming column ``wz`` when the correlation is below -0.5.
     Over consecutive 10 Hz epochs a gentle drive's course noise hid the sign (a flipped gyro
     on the simulated highway: -0.49); over 1 s it reads -0.98.
@@ -149,7 +153,7 @@ def check_yaw_rate_sign(
     turned = _cumtrapz(t, np.nan_to_num(wz))
     dgyro = np.diff(turned[rows[k]])
     ok = (dt <= 2.5 * max(spacing_s, 0.4)) & (np.abs(dcourse) < 0.5)
-    if ok.sum() < 3 or np.abs(dcourse[ok]).sum() < min_turn_rad:
+    if ok.sum() < SIGN_CHECK_MIN_INTERVALS or np.abs(dcourse[ok]).sum() < min_turn_rad:
         return None
     a, b = dcourse[ok] - dcourse[ok].mean(), dgyro[ok] - dgyro[ok].mean()
     denom = np.sqrt(np.sum(a * a) * np.sum(b * b))

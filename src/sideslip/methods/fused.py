@@ -131,7 +131,6 @@ from sideslip.filters.consistency import nis_consistency
 from sideslip.gnss_latency import identify_doppler_latency, identify_latency
 from sideslip.imu_lever import specific_force_at_cg
 from sideslip.methods import fused_engine as eng
-from sideslip.methods.doppler_heading import CourseSamples, check_yaw_rate_sign
 from sideslip.methods.fused_accel_offset import AccelOffset, lateral_accel_offset
 from sideslip.methods.fused_lever import check_lever, without_tyres
 from sideslip.methods.fused_settings import (
@@ -559,10 +558,6 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     doppler_latency = _doppler_latency(drive, nz, dop_params, geometry)
     gn = _gnss(drive, nz, doppler_latency[0])
     has_pos, has_vel = bool(gn["has_pos"]), bool(gn["has_vel"])
-    if has_pos or has_vel:
-        # a gyro axis flipped against the GNSS course is bad input, not a tyre to learn
-        cs = gnss.course_samples(drive, vehicle_speed(drive), use_positions=True)
-        check_yaw_rate_sign(t, wz, CourseSamples(cs.rows, cs.course, cs.speed, cs.sigma), drive.path)
     # latency and lever arm as states: on positions-only drives with identify_gnss_calibration;
     # with Doppler only with identify_doppler_lever (in steady turns r dl_x is
     # indistinguishable from v_y, so by default the file's lever arm is used)

@@ -153,6 +153,23 @@ def resolve_settings(overrides: Mapping[str, Mapping[str, Any]], where: str = "s
     return out
 
 
+def check_gyro_sign(drive: Drive) -> None:
+    """Every method: a yaw gyro that turns against the drive's GNSS course (Doppler, else
+    fixes) is bad input (:func:`sideslip.methods.doppler_heading.check_yaw_rate_sign`, 1 s
+    intervals); without GNSS or ``wz`` there is nothing to compare."""
+    if "wz" not in drive or not ("gnss_ve" in drive or "gnss_e" in drive):
+        return
+    from sideslip import gnss
+    from sideslip.methods.doppler_heading import CourseSamples, check_yaw_rate_sign
+    from sideslip.signals import vehicle_speed
+
+    if not np.isfinite(drive["wz"]).any():
+        return
+    cs = gnss.course_samples(drive, vehicle_speed(drive), use_positions=True)
+    samples = CourseSamples(cs.rows, cs.course, cs.speed, cs.sigma)
+    check_yaw_rate_sign(drive.t, drive["wz"], samples, drive.path)
+
+
 def run_method(method: str | Method, drive: Drive, vehicle: Vehicle, settings: Any = None) -> Estimate:
     """Run one method (by name or Method) after checking its needs; raises InputError naming
     what is missing.  ``settings``: an instance of the method's settings class, a mapping of
@@ -177,6 +194,7 @@ def run_method(method: str | Method, drive: Drive, vehicle: Vehicle, settings: A
             f"method '{method.name}' needs this column, which is missing or empty",
             column=cols[0],
         )
+    check_gyro_sign(drive)
     params = vehicle.missing(list(method.vehicle_params))
     if params:
         raise InputError(
