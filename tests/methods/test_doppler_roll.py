@@ -8,6 +8,7 @@ import pytest
 from sideslip.drive import Drive
 from sideslip.methods.doppler_roll import (
     CurveWindow,
+    _turned,
     roll_from_lateral,
     scan_ay_bias,
 )
@@ -28,6 +29,24 @@ def test_roll_from_lateral_inverts_the_specific_force_exactly() -> None:
     reading = a_y * np.cos(phi) + G * np.sin(phi) + 0.2
     assert np.allclose(roll_from_lateral(reading, r, v, ay_bias=0.2), phi, atol=1e-12)
 
+
+
+def test_the_scans_turn_integral_is_the_gyro_over_cos_roll() -> None:
+    # a body rolled by phi turns by the horizontal rate r / cos(phi): for every candidate
+    # delta G_y the kernel's trapezoid equals the integral with the roll of roll_from_lateral
+    # (cos(asin(y) - c) taken algebraically), to rounding; a gap's NaN comes out as NaN
+    rng = np.random.default_rng(3)
+    t = np.cumsum(rng.uniform(0.005, 0.015, 400))
+    a = rng.normal(0.0, 4.0, t.size)
+    ay_m = a + rng.normal(0.0, 0.5, t.size)
+    rate = rng.normal(0.2, 0.1, t.size)
+    grid = np.arange(-1.5, 1.505, 0.01)
+    phi = roll_from_lateral(ay_m[:, None], a[:, None], np.ones(1)[None, :], -grid[None, :])
+    f = rate[:, None] / np.maximum(np.cos(phi), 0.1)
+    direct = np.sum(0.5 * (f[1:] + f[:-1]) * np.diff(t)[:, None], axis=0)
+    assert np.allclose(_turned(t, rate, ay_m, a, grid), direct, rtol=1e-12, atol=1e-12)
+    ay_m[100] = np.nan
+    assert np.isnan(_turned(t, rate, ay_m, a, grid)).all()
 
 def test_roll_sign_is_iso_right_side_down_positive() -> None:
     # standing on a road whose right edge is lower: a_y,m = +g sin(phi) > 0 -> roll > 0
