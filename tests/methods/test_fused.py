@@ -206,7 +206,9 @@ def test_beta_std_covers_the_error(scenario, factor):
     a Doppler latency they cannot decide (one turn at one speed: |r| x the latency's rms about
     0 from the 50 ms prior and the fits, 8.4 on cr_step_steer and 5.4 on cr_circle; 6.0 and
     3.6 with a 30 ms prior, which left step_steer 100 ms late with 18 % inside 2 sigma) and
-    the tyre-relaxation term where GNSS pins beta (demo 4.8, urban_course 6.1)."""
+    the tyre-relaxation term where GNSS pins beta (demo 4.8, urban_course 6.1; 2026-12-07,
+    with the relaxation lag no longer differentiating the gyro's noise and the accelerometer
+    offset's sigma in beta_std: demo 6.7, urban_course 5.5, race_lap 4.3)."""
     drive = sim_drive(scenario)
     v = load_vehicle(drive.meta["vehicle"])
     est = fuse(drive, v.with_changes(cf=factor * v.cf, cr=factor * v.cr), smooth=True)

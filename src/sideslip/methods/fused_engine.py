@@ -716,9 +716,10 @@ def row_outputs(
     gradient of atan2 and the (v_x, v_y) covariance, times the consistency inflation, plus
     (``use_tyre``) the tyre relation's error on the rear slip angle
     ``(tyre_rel alpha_r)^2 + tyre_floor^2``, the learned rear stiffness's relative uncertainty
-    on it ``(sqrt(var_sr) / max(s_r, 0.2) alpha_r)^2`` and the tyre-relaxation lag
-    ``relaxation_m / v_x |d alpha_r / dt|`` (d/dt as ``np.gradient``: second order inside,
-    first at the ends).  Roll = bank (from c_y) + k_phi * f_y; r the Euler yaw rate through
+    on it ``(sqrt(var_sr) / max(s_r, 0.2) alpha_r)^2`` and the tyre-relaxation lag: alpha_r
+    less alpha_r through a first-order lag of time constant ``relaxation_m / |v_x|`` (the slip
+    the force follows; ``tau |d alpha_r / dt|`` on a ramp, without differentiating the yaw
+    gyro's noise in alpha_r row by row).  Roll = bank (from c_y) + k_phi * f_y; r the Euler yaw rate through
     roll and pitch."""
     n = t.size
     N = aux.shape[1]
@@ -730,8 +731,16 @@ def row_outputs(
     pitch = np.empty(n)
     alpha = np.empty(n)
     a = np.empty(aux.shape[0])
+    relaxed = np.empty(n)
     for i in range(n):
         alpha[i] = -(vy[i] - l_r * (wz[i] - bias_g[i])) / max(abs(vx[i]), 1.0)
+        # the slip the tyres' force follows: first-order lag over relaxation_m of travel
+        if i == 0 or relaxation_m <= 0.0:
+            relaxed[i] = alpha[i]
+        else:
+            tau = relaxation_m / max(abs(vx[i]), 1.0)
+            k = 1.0 - math.exp(-(t[i] - t[i - 1]) / tau)
+            relaxed[i] = relaxed[i - 1] + k * (alpha[i] - relaxed[i - 1])
     for i in range(n):
         j0 = j[i]
         j1 = min(j0 + 1, N - 1)
@@ -748,19 +757,8 @@ def row_outputs(
             vb += (tyre_rel * alpha[i]) ** 2 + tyre_floor**2
         rel_k = math.sqrt(max(var_sr, 0.0)) / max(s_r, 0.2)
         vb += (rel_k * alpha[i]) ** 2
-        if n > 2:
-            if i == 0:
-                d = (alpha[1] - alpha[0]) / (t[1] - t[0])
-            elif i == n - 1:
-                d = (alpha[n - 1] - alpha[n - 2]) / (t[n - 1] - t[n - 2])
-            else:
-                hs = t[i] - t[i - 1]
-                hd = t[i + 1] - t[i]
-                d = (hs * hs * alpha[i + 1] + (hd * hd - hs * hs) * alpha[i] - hd * hd * alpha[i - 1]) / (
-                    hs * hd * (hd + hs)
-                )
-            lag = relaxation_m / max(abs(vx[i]), 1.0) * abs(d)
-            vb += lag * lag
+        lag = alpha[i] - relaxed[i]
+        vb += lag * lag
         if abs(vx[i]) > 0.5:
             beta[i] = math.atan2(vy[i], max(abs(vx[i]), 1e-3))
             beta_std[i] = min(math.sqrt(max(vb, 0.0)), std_moving_max)
