@@ -95,7 +95,9 @@ def test_kkf_beta_std_covers_multipath_bursts_of_a_positions_only_receiver(seed:
     """dlc_bank (the simulator's nonlinear model) with a 20 Hz receiver without Doppler and
     multipath bursts (one every 10 s on average, 3 m per axis, while the receiver states 1 m):
     kkf's beta = course - heading takes every burst.  Truth: the simulator's beta.  Measured:
-    0.86 / 0.83 of the errors inside 2 beta_std without the check, 0.94 / 0.92 with it."""
+    0.86 / 0.83 of the errors inside 2 beta_std without the check, 0.94 / 0.92 with it; since
+    kkf weighs the overlapping 1 s courses as the one error they share (2026-12-07), 0.92 /
+    0.89 without, 0.97 / 0.96 with: the check adds at least 0.03 on both seeds."""
     config = SensorConfig().with_overrides(_lookup("dlc_bank").sensor_overrides)
     receiver = {"gnss_rate_hz": 20.0, "gnss_doppler": False}
     config = config.with_overrides({**receiver, "gnss_burst_rate_hz": 0.1, "gnss_burst_pos_std": 3.0})
@@ -108,5 +110,6 @@ def test_kkf_beta_std_covers_multipath_bursts_of_a_positions_only_receiver(seed:
         err = np.abs(np.angle(np.exp(1j * (est["beta"] - d["ref_beta"]))))[fast]
         shares[on] = float(np.mean(err < 2.0 * est["beta_std"][fast]))
         assert est.params["course_check"]["applied"] is on
-    assert shares[False] < 0.90 <= shares[True]
+    assert shares[True] >= 0.90
+    assert shares[True] >= shares[False] + 0.03
     assert est.params["course_check"]["share_beyond_stated"] > 0.1
