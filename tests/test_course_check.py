@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from sideslip.course_check import course_excess_variance, independent_lag_s
+from sideslip.course_check import course_excess_variance, courses_per_error, independent_lag_s
 from sideslip.drive import Drive
 from sideslip.methods.registry import run_method
 from sideslip.simulate import simulate
@@ -113,3 +113,18 @@ def test_kkf_beta_std_covers_multipath_bursts_of_a_positions_only_receiver(seed:
     assert shares[True] >= 0.90
     assert shares[True] >= shares[False] + 0.03
     assert est.params["course_check"]["share_beyond_stated"] > 0.1
+
+
+def test_courses_per_error_counts_the_courses_that_share_one_baseline() -> None:
+    # 20 Hz fixes differenced over 1 s: 20 courses per error; consecutive 1 Hz fixes share one
+    # fix with the next course: 2; Doppler epochs are each their own: 1
+    t = np.arange(0.0, 10.0, 0.01)
+    course = np.full(t.size, np.nan)
+    course[::5] = 0.0
+    pos = {"wz": np.zeros(t.size), "gnss_e": np.zeros(t.size), "gnss_n": np.zeros(t.size)}
+    assert courses_per_error(Drive(t, pos), t, course, 0.05) == pytest.approx(20.0)
+    slow = np.full(t.size, np.nan)
+    slow[::100] = 0.0
+    assert courses_per_error(Drive(t, pos), t, slow, 1.0) == pytest.approx(2.0)
+    doppler = {**pos, "gnss_ve": np.zeros(t.size), "gnss_vn": np.zeros(t.size)}
+    assert courses_per_error(Drive(t, doppler), t, course, 0.05) == 1.0

@@ -186,25 +186,12 @@ def test_heading_holds_with_positions_only_gnss_at_20_hz(method: str, scenario: 
 
 def test_overlapping_fix_courses_count_as_the_one_error_they_share() -> None:
     """A 20 Hz receiver's 1 s-baseline courses share their fixes with the next second's
-    courses: kkf scales their straight updates' variance by 20 (consecutive 1 Hz fixes: 2;
-    Doppler epochs: 1, white as stated).  On banked_track_turn with issue 15's receiver
+    courses: kkf scales their straight updates' variance by 20 (course_check's
+    courses_per_error).  On banked_track_turn with issue 15's receiver
     (20 Hz fixes, 50 ms late, antenna 0.5 m ahead; the simulator's nonlinear model as truth)
     the white weighting fitted the heading to the fixes' noise: beta RMSE 4.40 deg, 1.25 with
     the shared error (seed 0); the bound 2.5 deg sits between them."""
-    from sideslip.drive import Drive
-    from sideslip.methods.kkf import _course_correlation_factor
     from sideslip.simulate.run import _lookup
-
-    t = np.arange(0.0, 10.0, 0.01)
-    course = np.full(t.size, np.nan)
-    course[::5] = 0.0
-    pos = {"wz": np.zeros(t.size), "gnss_e": np.zeros(t.size), "gnss_n": np.zeros(t.size)}
-    assert _course_correlation_factor(Drive(t, pos), t, course, 0.05) == pytest.approx(20.0)
-    slow = np.full(t.size, np.nan)
-    slow[::100] = 0.0
-    assert _course_correlation_factor(Drive(t, pos), t, slow, 1.0) == pytest.approx(2.0)
-    doppler = {**pos, "gnss_ve": np.zeros(t.size), "gnss_vn": np.zeros(t.size)}
-    assert _course_correlation_factor(Drive(t, doppler), t, course, 0.05) == 1.0
 
     config = SensorConfig().with_overrides(_lookup("banked_track_turn").sensor_overrides)
     receiver = {"gnss_rate_hz": 20.0, "gnss_doppler": False, "gnss_latency_s": 0.05,

@@ -47,8 +47,8 @@ receiver, 16 scenarios, seed 0): mean beta RMSE 2.64 / 2.35 / 1.74 / 2.60 deg at
 deg: no better on the whole, not kept.  The course check (iv) covers those bursts instead:
 the limit ramp's 6.9 deg now has 0.95 of its errors inside 2 sigma.  The overlapping courses
 of one baseline share one error, and their straight updates carry it once: their variance is
-scaled by the courses per baseline (:func:`_course_correlation_factor`; mean beta RMSE on
-that receiver 2.60 -> 2.36 deg).
+scaled by the courses per baseline (:func:`sideslip.course_check.courses_per_error`; mean
+beta RMSE on that receiver 2.60 -> 2.36 deg).
 
 Low speed, standstill, outages (never NaN): below the gate or when the last course is older
 than ``KKF_MAX_COURSE_AGE_S`` (or 1.5 GNSS intervals) beta falls back to 0 with beta_std
@@ -69,7 +69,7 @@ from numpy.typing import NDArray
 from sideslip import gnss, typical
 from sideslip.calibrate.result import Fitted
 from sideslip.calibrate.sensors import drive_gyro_bias, gyro_zero_params
-from sideslip.course_check import course_excess_variance, independent_lag_s
+from sideslip.course_check import course_excess_variance, courses_per_error, independent_lag_s
 from sideslip.drive import Drive
 from sideslip.estimate import Estimate
 from sideslip.filters.kalman import predict_ws_nb, update_scalar_ws_nb
@@ -476,24 +476,6 @@ class KkfResult:
     course_check: dict[str, Any] = field(default_factory=dict)  # CourseExcess.summary()
 
 
-def _course_correlation_factor(drive: Drive, t: FloatArray, course: FloatArray, gnss_dt: float) -> float:
-    """How many course samples share one error: the straight updates' variance is scaled by it.
-
-    A course differenced from a fast receiver's fixes over a 1 s baseline shares its fixes, and
-    so its error, with the next 1 s of courses (20 of them at 20 Hz); a consecutive-fix course
-    shares one fix with the next (:func:`sideslip.course_check.independent_lag_s`).  As white
-    noise they told the bias and heading 20x (2x) more than they carry.  Measured, issue 15's
-    receiver (20 Hz fixes, 50 ms late, antenna 0.5 m ahead), 16 scenarios, seed 0: mean beta
-    RMSE 2.60 -> 2.36 deg (banked_track_turn 4.40 -> 1.25, demo 1.90 -> 1.13), lowest share
-    inside 2 sigma 0.95 -> 0.96.  Doppler epochs stay white, as the receiver states them: a
-    1 s correlation there too (multipath bursts) cured a burst on the first straight
-    (slalom_low_mu seed 0: 6.2 deg with 23 % inside 2 sigma -> 4.3 deg, 100 %) but let a raw
-    phone gyro's 4 deg/s bias drift the heading 0.78 deg (0.16 white).
-    """
-    rows = np.flatnonzero(np.isfinite(course))
-    return max(1.0, independent_lag_s(drive, t[rows]) / max(gnss_dt, 1e-3))
-
-
 def run_kkf(
     drive: Drive,
     vehicle: Vehicle,
@@ -528,7 +510,7 @@ def run_kkf(
         np.abs(speed) < STANDSTILL_SPEED,
     ]  # fmt: skip
 
-    corr = _course_correlation_factor(drive, t, course, gnss_dt)
+    corr = courses_per_error(drive, t, course, gnss_dt)
 
     def loop(q_bias: float) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray]:
         w, w_mean, w_fast, g_var, nu, nu_var, nu_rate, v, still = inputs
