@@ -140,10 +140,8 @@ def courses_per_error(drive: Drive, t: FloatArray, course: FloatArray, gnss_dt: 
     bias and heading 20x (2x) more than they carry.  Measured (kkf), issue 15's receiver (20 Hz
     fixes, 50 ms late, antenna 0.5 m ahead), 16 scenarios, seed 0: mean beta RMSE 2.60 -> 2.36
     deg (banked_track_turn 4.40 -> 1.25, demo 1.90 -> 1.13), lowest share inside 2 sigma 0.95
-    -> 0.96.  Doppler epochs stay white, as the receiver states them: a 1 s correlation there
-    too (multipath bursts) cured a burst on kkf's first straight (slalom_low_mu seed 0: 6.2 deg
-    with 23 % inside 2 sigma -> 4.3 deg, 100 %) but let a raw phone gyro's 4 deg/s bias drift
-    the heading 0.78 deg (0.16 white).
+    -> 0.96.  Doppler epochs count as white here, as the receiver states them (kkf counts one
+    error per second only while its bias is unknown: ``sideslip.methods.kkf``).
     """
     rows = np.flatnonzero(np.isfinite(course))
     return max(1.0, independent_lag_s(drive, t[rows]) / max(gnss_dt, 1e-3))
