@@ -203,6 +203,21 @@ def test_overlapping_fix_courses_count_as_the_one_error_they_share() -> None:
     assert np.sqrt(np.mean(err**2)) < 2.5
 
 
+def _kkf_share_with_doppler_bursts(scenario: str, seed: int) -> float:
+    """kkf's share of beta errors inside 2 beta_std (rows faster than 5 m/s) on ``scenario``
+    with Doppler multipath bursts: 3 m every 10 s on average, the receiver stating its usual
+    sigma."""
+    from sideslip.simulate.run import _lookup
+
+    config = SensorConfig().with_overrides(_lookup(scenario).sensor_overrides)
+    d = simulate(scenario, seed=seed, config=config.with_overrides(
+        {"gnss_burst_rate_hz": 0.1, "gnss_burst_pos_std": 3.0}))  # fmt: skip
+    est = run_method("kkf", d, load_vehicle(d.meta["vehicle"]))
+    fast = d["ref_vx"] > 5.0
+    err = np.abs(np.angle(np.exp(1j * (est["beta"] - d["ref_beta"]))))[fast]
+    return float(np.mean(err < 2.0 * est["beta_std"][fast]))
+
+
 def test_a_burst_on_the_first_straight_does_not_teach_a_confident_bias() -> None:
     """slalom_low_mu (the simulator's nonlinear model as truth) with Doppler multipath bursts
     (3 m every 10 s on average, the receiver stating its usual sigma): seed 0's first straight
@@ -210,15 +225,7 @@ def test_a_burst_on_the_first_straight_does_not_teach_a_confident_bias() -> None
     independent epochs they taught the bias 3 sigma off and the slalom after it took beta 6.2
     deg off with 23 % of the errors inside 2 sigma; counted as one error per second while the
     bias is unknown, 100 % (4.3 deg: the bias is still off, and beta_std says so)."""
-    from sideslip.simulate.run import _lookup
-
-    config = SensorConfig().with_overrides(_lookup("slalom_low_mu").sensor_overrides)
-    d = simulate("slalom_low_mu", seed=0, config=config.with_overrides(
-        {"gnss_burst_rate_hz": 0.1, "gnss_burst_pos_std": 3.0}))  # fmt: skip
-    est = run_method("kkf", d, load_vehicle(d.meta["vehicle"]))
-    fast = d["ref_vx"] > 5.0
-    err = np.abs(np.angle(np.exp(1j * (est["beta"] - d["ref_beta"]))))[fast]
-    assert np.mean(err < 2.0 * est["beta_std"][fast]) >= 0.90
+    assert _kkf_share_with_doppler_bursts("slalom_low_mu", seed=0) >= 0.90
 
 
 def test_doppler_bursts_on_straights_widen_beta_std() -> None:
@@ -227,12 +234,4 @@ def test_doppler_bursts_on_straights_widen_beta_std() -> None:
     burst's course error drifts too slowly for consecutive Doppler epochs to show it, and beta
     = course - heading took 1-3 deg errors inside a 0.5 deg sigma: 89.4 % inside 2 sigma with
     consecutive pairs alone, 94.4 % with pairs 1 s apart where the gyro shows no turn."""
-    from sideslip.simulate.run import _lookup
-
-    config = SensorConfig().with_overrides(_lookup("urban_course").sensor_overrides)
-    d = simulate("urban_course", seed=0, config=config.with_overrides(
-        {"gnss_burst_rate_hz": 0.1, "gnss_burst_pos_std": 3.0}))  # fmt: skip
-    est = run_method("kkf", d, load_vehicle(d.meta["vehicle"]))
-    fast = d["ref_vx"] > 5.0
-    err = np.abs(np.angle(np.exp(1j * (est["beta"] - d["ref_beta"]))))[fast]
-    assert np.mean(err < 2.0 * est["beta_std"][fast]) >= 0.92
+    assert _kkf_share_with_doppler_bursts("urban_course", seed=0) >= 0.92
