@@ -131,8 +131,9 @@ def independent_lag_s(drive: Drive, t_course: FloatArray) -> float:
 
 
 def courses_per_error(drive: Drive, t: FloatArray, course: FloatArray, gnss_dt: float) -> float:
-    """How many course samples share one error (``kkf`` and ``mkf`` scale their course
-    updates' variance by it; ``course`` NaN where no sample, ``gnss_dt`` the samples' interval).
+    """How many course samples share one error (``kkf`` scales its course updates' variance by
+    it; ``course`` NaN where no sample, ``gnss_dt`` the samples' interval).  On ``mkf`` the same
+    scaling was measured worse (0.310 -> 0.316 deg, limit slalom share 0.96 -> 0.64).
 
     A course differenced from a fast receiver's fixes over a 1 s baseline shares its fixes, and
     so its error, with the next 1 s of courses (20 of them at 20 Hz); a consecutive-fix course

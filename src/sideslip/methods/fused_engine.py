@@ -719,8 +719,8 @@ def row_outputs(
     on it ``(sqrt(var_sr) / max(s_r, 0.2) alpha_r)^2`` and the tyre-relaxation lag: alpha_r
     less alpha_r through a first-order lag of time constant ``relaxation_m / |v_x|`` (the slip
     the force follows; ``tau |d alpha_r / dt|`` on a ramp, without differentiating the yaw
-    gyro's noise in alpha_r row by row).  Roll = bank (from c_y) + k_phi * f_y; r the Euler yaw rate through
-    roll and pitch."""
+    gyro's noise in alpha_r row by row).  Roll = bank (from c_y) + k_phi * f_y; r the Euler
+    yaw rate through roll and pitch."""
     n = t.size
     N = aux.shape[1]
     beta = np.empty(n)
