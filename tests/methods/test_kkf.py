@@ -235,3 +235,24 @@ def test_doppler_bursts_on_straights_widen_beta_std() -> None:
     = course - heading took 1-3 deg errors inside a 0.5 deg sigma: 89.4 % inside 2 sigma with
     consecutive pairs alone, 94.4 % with pairs 1 s apart where the gyro shows no turn."""
     assert _kkf_share_with_doppler_bursts("urban_course", seed=0) >= 0.92
+
+
+def test_a_gap_in_the_gyro_adds_the_held_rates_error_to_the_heading() -> None:
+    """The loop holds the last gyro sample through a gap; the per-row variance it integrates
+    (times dt^2) must add up over the gap to the held error's own integral squared, the
+    heading error of a rate held wrong throughout (sideslip.methods.input_gaps), on top of
+    the white noise's (not the white noise alone, which left a 0.5 s hole's turn as exact)."""
+    from sideslip.methods.input_gaps import fill_input
+    from sideslip.methods.kkf import _gyro_variance
+
+    t = np.arange(0.0, 60.0, 0.01)
+    wz = 0.3 * np.sin(2.0 * np.pi * 0.2 * t)
+    gap = (t > 30.0) & (t < 30.5)
+    with_gap = np.where(gap, np.nan, wz)
+    white = _gyro_variance(t, wz, 0.002)
+    var = _gyro_variance(t, with_gap, 0.002)
+    np.testing.assert_array_equal(var[~gap], white[~gap])
+    sigma = fill_input(t, with_gap, interpolate=False).sigma
+    added = float(np.sum((var - white)[gap]) * 0.01**2)
+    np.testing.assert_allclose(added, float(np.sum(sigma[gap]) * 0.01) ** 2, rtol=0.05)
+    assert added > 100 * float(np.sum(white[gap]) * 0.01**2)

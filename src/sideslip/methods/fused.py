@@ -107,6 +107,12 @@ inputs' half-row timing accounts for) and the filter with the tyres predicts the
 better with it moved (``params["assumed"]["gnss_lever_x"]``).  The causal filter, with
 ``whole_drive_calibration``, runs the smoother first and takes the antenna its check found.
 
+Holes in the IMU inputs (:mod:`sideslip.methods.input_gaps`): the smoother interpolates
+across them, the causal filter holds the last sample, and the fill's error, the drive's own
+change of the signal over the hole's span, is one excursion over the hole in the heading's
+and the velocities' process noise (and in the axle relations' variance, for the lateral
+reading; the bank's, for the roll gyro where it drives the bank).
+
 Discretisation and cost: the smoother steps on nodes every ``step_s`` (inputs averaged in
 between, states linearly interpolated back to every row); the filter steps on every row.
 Memory: the filtered state and the float32 upper triangle of each node's covariance; linear
@@ -142,6 +148,8 @@ from sideslip.methods.fused_settings import (
 from sideslip.methods.fused_stiffness import PRIOR_SHIFT as STIFFNESS_PRIOR_SHIFT
 from sideslip.methods.fused_stiffness import model_form_params, prior_share, rear_secant
 from sideslip.methods.fused_vrw import NoiseChoice, search_accel_vrw, search_noise_scale
+from sideslip.methods.input_gaps import Filled as FillResult
+from sideslip.methods.input_gaps import fill_input, gap_noise_density
 from sideslip.methods.registry import SPEED, register
 from sideslip.methods.roll_gyro_gradient import identify_roll_gradient_from_gyro
 from sideslip.models.fused_measurements import SCALE_MAX, SCALE_MIN
@@ -188,15 +196,23 @@ def _hold(drive: Drive, name: str, fill: float = 0.0) -> FloatArray:
     return v
 
 
+def _imu(drive: Drive, name: str, smooth: bool) -> FillResult:
+    """IMU column ``name`` with its gaps filled (interpolated by the smoother, held by the
+    causal filter) and the fill's error (:mod:`sideslip.methods.input_gaps`); a column the
+    drive lacks is 0 with no error (the caller knows it is absent)."""
+    values = drive[name] if name in drive else np.full(len(drive), np.nan)
+    return fill_input(drive.t, values, interpolate=smooth)
+
+
 def _accel_at_cg(
-    drive: Drive, vehicle: Vehicle, wx: FloatArray, wy: FloatArray, wz: FloatArray, causal: bool
+    drive: Drive, vehicle: Vehicle, wx: FloatArray, wy: FloatArray, wz: FloatArray, causal: bool,
+    ax: FloatArray, ay: FloatArray,
 ) -> tuple[FloatArray, FloatArray]:
-    """The accelerometer's x and y specific force (m/s^2, gaps held) moved from the IMU's
-    place in the vehicle file (``imu_xyz``) to the CG, where the kinematics and the axle
-    force balance hold (:mod:`sideslip.imu_lever`; a phone 1.2 m ahead of the CG read
-    r' l_x as tyre force in every transient: race_lap 0.048 -> 0.654 deg, 59 % inside
-    2 sigma, before the move)."""
-    ax, ay = _hold(drive, "ax"), _hold(drive, "ay")
+    """The accelerometer's x and y specific force (m/s^2, gaps filled: ``ax``, ``ay``) moved
+    from the IMU's place in the vehicle file (``imu_xyz``) to the CG, where the kinematics
+    and the axle force balance hold (:mod:`sideslip.imu_lever`; a phone 1.2 m ahead of the
+    CG read r' l_x as tyre force in every transient: race_lap 0.048 -> 0.654 deg, 59 %
+    inside 2 sigma, before the move)."""
     return specific_force_at_cg(drive.t, ax, ay, wx, wy, wz, vehicle.imu_xyz, causal=causal)
 
 
@@ -541,8 +557,11 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
         )  # fmt: skip
     t = drive.t
     n = len(drive)
-    wz, wx, wy = _hold(drive, "wz"), _hold(drive, "wx"), _hold(drive, "wy")
-    ax, ay = _accel_at_cg(drive, vehicle, wx, wy, wz, causal=not smooth)
+    filled = {c: _imu(drive, c, smooth) for c in ("wz", "wx", "ax", "ay")}
+    wz, wx, wy = filled["wz"].values, filled["wx"].values, _imu(drive, "wy", smooth).values
+    ax, ay = _accel_at_cg(
+        drive, vehicle, wx, wy, wz, not smooth, filled["ax"].values, filled["ay"].values
+    )
     # on a long drive the per-row IMU inputs are rebuilt after the node pass (the same
     # arithmetic, so the same bits) instead of held through it: 5 x 8 bytes a row less at the
     # pass's peak (the filtered covariances), a few ms per hour of drive
@@ -578,6 +597,10 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     # the smallest velocity random walk the drive can have: its accelerometer's white noise
     vrw_floor = accel_noise_sigma(ay) * math.sqrt(drive.dt_median) if n > 1 else 0.0
     force_var = force_noise_variance(t, ay, tau_f, nz, causal=not smooth)
+    # a gap's fill of the lateral reading is one error over the whole gap, in every axle
+    # relation inside it: its variance quoted per axle_error_tau_s like the relations' own
+    fa = filled["ay"]
+    force_var = force_var + fa.sigma**2 * np.maximum(fa.gap_s / nz.axle_error_tau_s, 1.0)
     # where the tyres alone carry the slip (no GNSS) the smoother learns the stiffness from
     # the transients, and there the axle forces must not lag the state: zero-phase low-pass
     # (forward and backward: no lag, it has the later samples) and the moment balance with the
@@ -676,8 +699,15 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     has_wx = has_wx and nz.roll_gyro_bank and (tyres_carry or nz.roll_gyro_bank_with_doppler)
     bx = float(np.mean(wx)) if has_wx and (smooth or nz.whole_drive_calibration) else 0.0
     road_roll = (wx - bx - k_phi * _backward_rate(t, fy_lp)) if has_wx else np.zeros(n)
-    U = eng.block_means(idx, (wz, wx, wy, ax, ay, fy_lp, road_roll))
-    del road_roll
+    # process noise of the inputs' gap fills (zero without gaps; the roll gyro's only where
+    # it drives the bank)
+    no_gap = np.zeros(n)
+    q_gap = [
+        gap_noise_density(t, filled[c].sigma) if filled[c].sigma.any() and (c != "wx" or has_wx) else no_gap
+        for c in ("wz", "wx", "ax", "ay")
+    ]
+    U = eng.block_means(idx, (wz, wx, wy, ax, ay, fy_lp, road_roll, *q_gap))
+    del road_roll, q_gap, filled
     vw_n = vw[idx] if stride == 1 else _window_mean(vw, idx)
     g_node = np.searchsorted(idx, g_rows, side="left").astype(np.int64)
     tau_fix, tau_sigma = 0.0, nz.latency_prior_sigma_s  # the latency fixes are taken with, s
@@ -843,8 +873,10 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     node_params.update(lever_params)
     del xs, var, cov_vxvy  # the row outputs need only the columns copied above
     if rebuild:
-        wz, wy = _hold(drive, "wz"), _hold(drive, "wy")
-        ax, ay = _accel_at_cg(drive, vehicle, _hold(drive, "wx"), wy, wz, causal=not smooth)
+        wz, wy = _imu(drive, "wz", smooth).values, _imu(drive, "wy", smooth).values
+        wx_row = _imu(drive, "wx", smooth).values
+        ax_row, ay_row = (_imu(drive, c, smooth).values for c in ("ax", "ay"))
+        ax, ay = _accel_at_cg(drive, vehicle, wx_row, wy, wz, not smooth, ax_row, ay_row)
         fy_lp = lp(t, (ay - offset_y.value) * (1.0 - G * k_phi), tau_f)  # as above
         if smooth:
             del ax, ay

@@ -85,6 +85,7 @@ from sideslip.estimate import Estimate
 from sideslip.filters.kalman import predict_ws_nb, update_scalar_ws_nb
 from sideslip.filters.nis_windows import binned_nis_consistency
 from sideslip.frames import wrap_angle
+from sideslip.methods.input_gaps import fill_input, gap_noise_density
 from sideslip.methods.mkf import (
     GNSS_COLUMNS,
     SIGMA_BIAS0,
@@ -313,6 +314,20 @@ def straight_flags(
     )  # fmt: skip
 
 
+def _gyro_variance(t: NDArray, wz: NDArray, sigma_100hz: float) -> NDArray:
+    """Per-row variance of the yaw rate the loop integrates (rad/s squared): the gyro's white
+    noise, and in a gap of the gyro (the loop holds the last sample) the held rate's error,
+    one excursion over the whole gap (:mod:`sideslip.methods.input_gaps`), as the variance
+    whose step times dt^2 adds that error's share of the heading variance (a 0.5 s hole in
+    the gyro on a race lap turned the heading by degrees that the filter kept as exact)."""
+    var = sample_variance(t, sigma_100hz)
+    held = fill_input(t, wz, interpolate=False)
+    if held.sigma.any():
+        dt = np.clip(np.diff(t, prepend=t[0]), 1e-4, None)
+        var = var + gap_noise_density(t, held.sigma) / dt
+    return var
+
+
 @numba.njit(cache=True)
 def _kkf_loop(
     t: NDArray, wz: NDArray, wz_mean: NDArray, wz_fast: NDArray, gyro_var: NDArray,
@@ -522,7 +537,7 @@ def run_kkf(
     # released before the beta series are formed
     inputs = [
         wz, causal_mean(t, wz, STRAIGHT_WINDOW_S), causal_mean(t, wz, STRAIGHT_FAST_S),
-        sample_variance(t, g_sigma), course, cm.sigma**2,
+        _gyro_variance(t, wz, g_sigma), course, cm.sigma**2,
         _course_rate(t, cm.course, course_rate_window(cm.sigma, gnss_dt)), speed,
         np.abs(speed) < STANDSTILL_SPEED,
     ]  # fmt: skip

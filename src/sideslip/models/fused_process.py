@@ -60,6 +60,9 @@ NX_GNSS_CAL = 3
 IE, IN, IPSI, IVX, IVY, IBG, ICY, ICX, ISW, ISG, IPE, IPN, ISF, ISR, IMU = range(NX_CORE)
 ITAU, ILX, ILY = range(NX_CORE, NX_CORE + NX_GNSS_CAL)
 U_WZ, U_WX, U_WY, U_AX, U_AY, U_FY, U_RR = range(7)
+# process noise densities of the inputs' gap fills (sideslip.methods.input_gaps): yaw gyro
+# (rad^2/s), roll gyro (rad^2/s), longitudinal and lateral accelerometer ((m/s)^2/s)
+U_QWZ, U_QWX, U_QAX, U_QAY = range(7, 11)
 ATT_CLAMP = 0.6  # |sin| of bank / pitch beyond which the offsets are taken as sensor faults
 
 STATE_NAMES = (
