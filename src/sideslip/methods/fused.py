@@ -129,8 +129,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from sideslip import doppler_latency_lateral, gnss, gnss_latency
+from sideslip import gnss
 from sideslip.calibrate.friction import drive_friction
+from sideslip.doppler_timing import choose_doppler_latency
 from sideslip.drive import LONG_DRIVE_ROWS, Drive
 from sideslip.estimate import Estimate
 from sideslip.filters.consistency import nis_consistency
@@ -360,68 +361,36 @@ def _gnss(drive: Drive, nz: FusedSettings, doppler_latency_s: float = 0.0) -> di
     return out
 
 
-DOPPLER_LATENCY_MAX_SIGMA_S = 0.015  # a Doppler latency is applied only when this decisive ...
-DOPPLER_LATENCY_MIN_Z = 3.0  # ... and this many sigma above 0 (receivers are late, not early),
-# the sigma with a floor for the fit's systematic error, which a long drive does not average
-# away (the 1 h bench drive, on time: +0.015 +- 0.004 s; 17 simulated drives within 0.015 s)
-DOPPLER_LATENCY_FLOOR_S = 0.01
-
-
 def _doppler_latency(
     drive: Drive, nz: FusedSettings, params: dict[str, Any], geometry: tuple[float, ...] = (0.0, 0.0, 0.0)
 ) -> tuple[float, float]:
     """The GNSS Doppler's latency (s) the epochs are taken with, and the 1-sigma of what may
     remain: the tyre-free fits of :func:`sideslip.gnss_latency.identify_doppler_latency` (speed
     against the wheels, course rate against the lateral accelerometer; ``geometry`` the antenna
-    ahead of and above the IMU and the CG's distance to the rear axle, m) where they decide it
-    (sigma at most :data:`DOPPLER_LATENCY_MAX_SIGMA_S`) and it is late by more than
-    :data:`DOPPLER_LATENCY_MIN_Z` sigma (the fit's, with :data:`DOPPLER_LATENCY_FLOOR_S`), with
-    that sigma; a decisive fit that is not late leaves 0 with the larger of the sigma and the
-    fit's value.  Otherwise the epochs stay at their stamps and the sigma is the root mean
-    square of the latency about 0 under the fit combined with the prior
-    N(0, ``doppler_latency_prior_sigma_s``): the prior's sigma where the drive tells nothing,
-    up to about the fit's value where it tells something but not enough to move the epochs
-    (slalom_low_mu 100 ms late: +0.095 +- 0.016 s, kept at 0 with sigma 0.088 s).  ``(0, 0)``
-    when switched off.
+    ahead of and above the IMU and the CG's distance to the rear axle, m), applied where they
+    decide it (:func:`sideslip.doppler_timing.choose_doppler_latency`, with the prior
+    N(0, ``doppler_latency_prior_sigma_s``) where they do not: slalom_low_mu 100 ms late reads
+    +0.095 +- 0.016 s, kept at 0 before 2026-12-07 with sigma 0.088 s, now applied).  ``(0,
+    0)`` when switched off.
 
     A Doppler velocity stamped tau late lags the heading by r tau, which in a turn reads as
     sideslip: 50 ms cost step_steer 0.034 -> 0.445 deg beta RMSE with 19 % inside 2 sigma,
-    urban_course 0.037 -> 0.336 (fused_accuracy.md).  The guards keep a fit that the drive
-    does not inform from moving the epochs: the speed fit alone read race_lap (limit slip) and
-    urban_highway (few speed changes) +0.04 to +0.3 s at a true 0, with sigmas of 0.05-0.15 s;
-    a negative value means the wheels' clock is late (a filtered CAN speed), not the
-    receiver's."""
+    urban_course 0.037 -> 0.336 (fused_accuracy.md)."""
     if not nz.identify_doppler_latency or "gnss_ve" not in drive:
         return 0.0, 0.0
     est = identify_doppler_latency(drive, *geometry)
-    prior = nz.doppler_latency_prior_sigma_s
+    timing = choose_doppler_latency(est, nz.doppler_latency_prior_sigma_s)
+    params["gnss_doppler_latency_note"] = timing.note
     if est is None:
-        params["gnss_doppler_latency_note"] = (
-            "not identified: too few usable Doppler epochs above 3 m/s (the speed fit needs"
-            f" {gnss_latency.MIN_FIXES}, the course-rate fit {doppler_latency_lateral.MIN_EPOCHS}"
-            " from a receiver at 5 Hz or faster)"
-        )
-        return 0.0, prior
+        return timing.latency_s, timing.sigma_s
     params["gnss_doppler_latency_identified_s"] = est.latency_s
     params["gnss_doppler_latency_identified_sigma_s"] = est.sigma_s
     fits = {"speed": (est.speed_s, est.speed_sigma_s), "lateral": (est.lateral_s, est.lateral_sigma_s)}
     for key, (value, sigma) in fits.items():
         if math.isfinite(value) and math.isfinite(sigma):  # [latency, 1-sigma] of each fit
             params[f"gnss_doppler_latency_{key}_fit_s"] = [value, sigma]
-    params["gnss_doppler_latency_s"] = 0.0
-    if est.sigma_s > DOPPLER_LATENCY_MAX_SIGMA_S:
-        params["gnss_doppler_latency_note"] = "not applied: the drive does not decide it"
-        if prior <= 0.0:
-            return 0.0, 0.0
-        return 0.0, math.hypot(est.posterior_mean(prior), est.posterior_sigma(prior))
-    sigma = math.hypot(est.sigma_s, DOPPLER_LATENCY_FLOOR_S)
-    if est.latency_s < DOPPLER_LATENCY_MIN_Z * sigma:
-        params["gnss_doppler_latency_note"] = "not applied: not late beyond the fit's errors"
-        return 0.0, max(abs(est.latency_s), sigma)
-    tau = min(est.latency_s, 0.5)
-    params["gnss_doppler_latency_s"] = tau
-    params["gnss_doppler_latency_note"] = "each GNSS epoch taken this long before its stamp"
-    return tau, sigma
+    params["gnss_doppler_latency_s"] = timing.latency_s
+    return timing.latency_s, timing.sigma_s
 
 
 def _initial_state(drive: Drive, vw: FloatArray, nx: int, nz: FusedSettings) -> tuple[FloatArray, FloatArray]:

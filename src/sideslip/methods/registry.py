@@ -18,6 +18,7 @@ from typing import Any
 
 import numpy as np
 
+from sideslip.doppler_timing import drive_on_receiver_time
 from sideslip.drive import SPEED_COLUMNS, Drive
 from sideslip.errors import InputError
 from sideslip.estimate import Estimate, check_estimate
@@ -204,11 +205,17 @@ def run_method(method: str | Method, drive: Drive, vehicle: Vehicle, settings: A
         )
     moved_note = None
     run_drive = drive
+    timing = None
+    if uses_gnss(method) and "gnss_ve" in drive:
+        # a GNSS Doppler stamped late reads r x latency as sideslip in every turn: the
+        # epochs are taken at their stamps less the latency the drive decides
+        # (sideslip.doppler_timing; fused times the receiver itself)
+        run_drive, timing = drive_on_receiver_time(drive, vehicle)
     if method.accelerometer != "own":
         # an IMU the vehicle file puts away from the CG reads omega' x l + omega x (omega x l)
         # more than the CG's specific force (an IMU 1.2 m ahead: obs_modified on urban_course
         # 0.113 -> 0.177 deg without the move)
-        run_drive, moved_note = drive_at_cg(drive, vehicle, causal=method.accelerometer == "cg_causal")
+        run_drive, moved_note = drive_at_cg(run_drive, vehicle, causal=method.accelerometer == "cg_causal")
     if method.settings is None:
         est = method.func(run_drive, vehicle)
     else:
@@ -217,6 +224,11 @@ def run_method(method: str | Method, drive: Drive, vehicle: Vehicle, settings: A
     if moved_note is not None:
         est = Estimate(est.method, est.t, est.series, {**est.params, "accelerometer_at_cg": moved_note},
                        est.innovations)  # fmt: skip
+    if timing is not None:
+        est = Estimate(est.method, est.t, est.series, {
+            **est.params, "gnss_doppler_latency_applied_s": timing.latency_s,
+            "gnss_doppler_latency_applied_note": timing.note,
+        }, est.innovations)  # fmt: skip
     if est.method != method.name or (settings is not None and "settings" not in est.params):
         est_params = dict(est.params)
         if settings is not None:
@@ -227,6 +239,13 @@ def run_method(method: str | Method, drive: Drive, vehicle: Vehicle, settings: A
     if not np.array_equal(est.t, drive.t):
         raise RuntimeError(f"method {method.name}: estimate is not on the drive's time base")
     return est
+
+
+def uses_gnss(method: Method) -> bool:
+    """Whether ``method`` needs a GNSS column (then :func:`run_method` hands it the drive on
+    the receiver's time, :func:`sideslip.doppler_timing.drive_on_receiver_time`)."""
+    names = [c for need in method.columns for c in ((need,) if isinstance(need, str) else need)]
+    return any(c.startswith("gnss_") for c in names)
 
 
 def columns_used(method: Method, drive: Drive) -> list[str]:
