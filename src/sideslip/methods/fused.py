@@ -107,10 +107,11 @@ inputs' half-row timing accounts for) and the filter with the tyres predicts the
 better with it moved (``params["assumed"]["gnss_lever_x"]``).  The causal filter, with
 ``whole_drive_calibration``, runs the smoother first and takes the antenna its check found.
 
-Holes in the IMU inputs (:mod:`sideslip.methods.input_gaps`): the smoother interpolates
-across them, the causal filter holds the last sample, and the fill's error, the drive's own
-change of the signal over the hole's span, is one excursion over the hole in the heading's
-and the velocities' process noise (and in the axle relations' variance, for the lateral
+Holes in the IMU inputs and pauses of the logger (rows missing; :mod:`sideslip.methods.input_gaps`):
+the smoother interpolates across a hole, the causal filter holds the last sample, a pause's
+step is the sample before it held, and the fill's error, the drive's own change of the
+signal over the gap's span, is one excursion over the gap in the heading's and the
+velocities' process noise (and in the axle relations' variance, for the lateral
 reading; the bank's, for the roll gyro where it drives the bank).
 
 Discretisation and cost: the smoother steps on nodes every ``step_s`` (inputs averaged in
@@ -150,7 +151,7 @@ from sideslip.methods.fused_stiffness import PRIOR_SHIFT as STIFFNESS_PRIOR_SHIF
 from sideslip.methods.fused_stiffness import model_form_params, prior_share, rear_secant
 from sideslip.methods.fused_vrw import NoiseChoice, search_accel_vrw, search_noise_scale
 from sideslip.methods.input_gaps import Filled as FillResult
-from sideslip.methods.input_gaps import fill_input, gap_noise_density
+from sideslip.methods.input_gaps import fill_input, gap_increments
 from sideslip.methods.registry import SPEED, register
 from sideslip.methods.roll_gyro_gradient import identify_roll_gradient_from_gyro
 from sideslip.models.fused_measurements import SCALE_MAX, SCALE_MIN
@@ -669,13 +670,19 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     bx = float(np.mean(wx)) if has_wx and (smooth or nz.whole_drive_calibration) else 0.0
     road_roll = (wx - bx - k_phi * _backward_rate(t, fy_lp)) if has_wx else np.zeros(n)
     # process noise of the inputs' gap fills (zero without gaps; the roll gyro's only where
-    # it drives the bank)
+    # it drives the bank): each row's increment belongs to the interval ending there, so
+    # moved one row back its block sum is the node step's, then per second of that step
     no_gap = np.zeros(n)
     q_gap = [
-        gap_noise_density(t, filled[c].sigma) if filled[c].sigma.any() and (c != "wx" or has_wx) else no_gap
+        np.append(gap_increments(t, filled[c].sigma)[1:], 0.0)
+        if filled[c].sigma.any() and (c != "wx" or has_wx) else no_gap
         for c in ("wz", "wx", "ax", "ay")
-    ]
+    ]  # fmt: skip
     U = eng.block_means(idx, (wz, wx, wy, ax, ay, fy_lp, road_roll, *q_gap))
+    if any(q is not no_gap for q in q_gap):
+        rows_per_node = np.diff(np.append(idx, n))
+        step_n = np.append(np.diff(tn), np.inf)
+        U[:, len(U[0]) - len(q_gap) :] *= (rows_per_node / np.where(step_n > 0.0, step_n, np.inf))[:, None]
     del road_roll, q_gap, filled
     vw_n = vw[idx] if stride == 1 else _window_mean(vw, idx)
     g_node = np.searchsorted(idx, g_rows, side="left").astype(np.int64)

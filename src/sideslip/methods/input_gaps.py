@@ -23,19 +23,24 @@ from numpy.typing import NDArray
 
 FloatArray = NDArray[np.float64]
 
-__all__ = ["Filled", "fill_input", "gap_noise_density"]
+__all__ = ["Filled", "fill_input", "gap_increments", "gap_noise_density"]
 
 
 class Filled(NamedTuple):
-    """A sensor column with its gaps filled: ``values``; the fill's 1-sigma error per row
-    (0 on rows with a sample); the length (s) of the gap each row lies in (0 on samples)."""
+    """A sensor column with its gaps filled: ``values``; the 1-sigma error of the input over
+    the interval ending at each row (0 where the row and the one before it carry samples one
+    table step apart); the length (s) of the gap each row lies in (0 outside gaps)."""
 
     values: FloatArray
     sigma: FloatArray
     gap_s: FloatArray
 
+
 _SPAN_POINTS = 12  # spans of the change statistic, log-spaced from the row step to the gap
 _MAX_POINTS = 20000  # sample times the statistic is taken over (evenly thinned)
+# a step of the table this many times its median is a pause of the logger (rows missing, not
+# cells): the input over it is the sample before it, held
+PAUSE_STEPS = 3.0
 
 
 def fill_input(t: FloatArray, values: FloatArray, interpolate: bool) -> Filled:
@@ -47,14 +52,18 @@ def fill_input(t: FloatArray, values: FloatArray, interpolate: bool) -> Filled:
     the last sample held (causal; the error grows with the time since it).  Before the first
     and after the last sample the nearest sample is held.  The sigma at a span ``tau`` is the
     root-mean-square change of the signal over ``tau`` across the whole drive (its own
-    dynamics, and twice its white noise's variance at short spans); 0 on rows with a sample.
+    dynamics, and twice its white noise's variance at short spans); 0 on rows with a sample,
+    except a row that follows a pause of the logger (a table step over :data:`PAUSE_STEPS`
+    times the median): the input held over that step is wrong by the change over the step.
     A column with no sample at all is 0 everywhere, with sigma 0 (the caller decides what a
     missing sensor means)."""
     n = t.size
     v = np.asarray(values, dtype=float)
     ok = np.isfinite(v)
     sigma = np.zeros(n)
-    if ok.all() or not ok.any():  # one zero array for both (nothing writes them)
+    step = np.diff(t, prepend=t[0]) if n else np.zeros(0)
+    pause = step > PAUSE_STEPS * float(np.median(step[1:])) if n > 2 else np.zeros(n, dtype=bool)
+    if not ok.any() or (ok.all() and not pause.any()):  # one zero array for both (read only)
         return Filled(v.copy() if ok.all() else np.zeros(n), sigma, sigma)
     ts, vs = t[ok], v[ok]
     rows = np.arange(n)
@@ -71,8 +80,12 @@ def fill_input(t: FloatArray, values: FloatArray, interpolate: bool) -> Filled:
         filled = np.where(prev >= 0, v[np.maximum(prev, 0)], vs[0])
         span = np.where(prev >= 0, before, after)
     gap = ~ok
-    sigma[gap] = _change_sigma(ts, vs, span[gap])
     length = np.where(gap, np.minimum(before + after, t[-1] - t[0]), 0.0)
+    paused = pause & ok
+    span = np.where(paused, step, span)
+    length = np.where(paused, step, length)
+    need = gap | paused
+    sigma[need] = _change_sigma(ts, vs, span[need])
     return Filled(filled, sigma, length)
 
 
@@ -99,23 +112,30 @@ def _change_sigma(ts: FloatArray, vs: FloatArray, span: FloatArray) -> FloatArra
     return out
 
 
-def gap_noise_density(t: FloatArray, sigma: FloatArray) -> FloatArray:
-    """Per-row process noise density (variance per second) of the integral of a fill error of
-    1-sigma ``sigma``: inside one gap the error is one and the same excursion, not white, so
-    its integral's variance at time T is S(T)^2 with S(T) the integral of sigma since the
-    gap began; its rate is 2 S sigma.  Summed over a gap's rows (times their step) it gives
-    (integral of sigma over the gap)^2: the heading error of a rate held wrong throughout.
-    Rows with a sample (sigma 0) reset S."""
+def gap_increments(t: FloatArray, sigma: FloatArray) -> FloatArray:
+    """Per row, the variance the fill error adds to its own integral over the interval ending
+    at the row (rad^2 for a gyro, (m/s)^2 for an accelerometer).  Inside one gap the error is
+    one and the same excursion, not white: its integral's variance at time T is S(T)^2, with
+    S the integral of ``sigma`` since the gap began, so the interval adds S_i^2 - S_(i-1)^2,
+    and a gap adds (integral of sigma over it)^2 in all: the heading error of a rate held
+    wrong throughout.  Rows with sigma 0 end a gap."""
     n = t.size
-    q = np.zeros(n)
     if n < 2 or not (sigma > 0.0).any():
-        return q
+        return np.zeros(n)
     dt = np.diff(t, prepend=t[0])
-    inc = sigma * dt
-    c = np.cumsum(inc)
+    c = np.cumsum(sigma * dt)
     real = sigma <= 0.0
     start = np.where(real, np.arange(n), -1)
     np.maximum.accumulate(start, out=start)
     s = c - np.where(start >= 0, c[np.maximum(start, 0)], 0.0)
-    q[:] = 2.0 * s * sigma
-    return q
+    s_prev = np.concatenate(([0.0], s[:-1]))
+    s_prev[real] = 0.0
+    return np.asarray(np.where(real, 0.0, s * s - s_prev * s_prev), dtype=float)
+
+
+def gap_noise_density(t: FloatArray, sigma: FloatArray) -> FloatArray:
+    """:func:`gap_increments` per second of each row's interval (variance per second; 0 on
+    the first row): the process noise density of the fill error's integral."""
+    inc = gap_increments(t, sigma)
+    dt = np.diff(t, prepend=t[0])
+    return np.asarray(np.where(dt > 0.0, inc / np.where(dt > 0.0, dt, 1.0), 0.0), dtype=float)
