@@ -23,7 +23,9 @@ from sideslip.drive import Drive
 from sideslip.gnss_latency import LatencyEstimate, identify_doppler_latency
 from sideslip.vehicle import Vehicle
 
-__all__ = ["DopplerTiming", "choose_doppler_latency", "drive_on_receiver_time", "shift_gnss"]
+__all__ = [
+    "DopplerTiming", "choose_doppler_latency", "drive_on_receiver_time", "forget_timings", "shift_gnss",
+]  # fmt: skip
 
 # a Doppler latency is applied only when this decisive ...  (was 0.015 s, set when the speed
 # fit stood alone; with the course-rate fit beside it the fits are centred on the truth:
@@ -116,6 +118,11 @@ def shift_gnss(drive: Drive, latency_s: float) -> Drive:
 # methods of one `sideslip estimate` run time a drive once
 _TIMED: dict[int, tuple[weakref.ref[Drive], tuple[float, float, float], LatencyEstimate | None]] = {}
 _TIMED_MAX = 4
+
+
+def forget_timings() -> None:
+    """Drop the drives timed so far (a benchmark times each run from scratch)."""
+    _TIMED.clear()
 
 
 def _geometry(vehicle: Vehicle) -> tuple[float, float, float]:
