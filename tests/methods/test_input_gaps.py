@@ -159,3 +159,32 @@ def test_a_logger_pause_does_not_turn_the_heading_for_good(method, bound_deg) ->
     est = run_method(method, drive, vehicle)
     assert metrics(drive, est.series)["beta_rmse_deg"] < bound_deg
     assert two_sigma_share(drive, est) >= 0.93
+
+
+def without_gnss(drive):
+    return replace(drive, data={k: v for k, v in drive.data.items() if not k.startswith("gnss")})
+
+
+@pytest.mark.parametrize(
+    ("method", "gaps", "bound_deg"),
+    [
+        ("fused", "holes", 0.15),
+        ("fused_filter", "holes", 0.45),
+        ("fused", "pauses", 0.4),
+    ],
+)
+def test_without_gnss_gaps_leave_the_tyres_in_charge(method, gaps, bound_deg) -> None:
+    """The race lap without GNSS (the tyres alone carry the slip): eight 0.5 s holes in the
+    yaw gyro (hole seed 3) or three 2 s pauses of the logger.  Measured 2026-12-07 (beta
+    RMSE deg; 0.086 / 0.334 without gaps): before, holes fused 0.245, fused_filter 0.545,
+    pauses fused 0.582.  Now the causal filter fills a hole at speed with the path's rate
+    a_y / v where that is the better guess than the held sample, and v_y's gap variance is
+    left out where no Doppler measures v_y (it let the brush relation's linearisation point
+    leave the curve's linear range: 5.98 deg on a seed-5 lap): 0.086, 0.372, 0.278.  Bounds
+    between, nearer the new values; every share stays at 0.9 or above."""
+    whole = sim_drive("race_lap")
+    drive = without_gnss(gyro_holes(whole, seed=3) if gaps == "holes" else logger_pauses(whole))
+    vehicle = load_vehicle(whole.meta["vehicle"])
+    est = run_method(method, drive, vehicle)
+    assert metrics(drive, est.series)["beta_rmse_deg"] < bound_deg
+    assert two_sigma_share(drive, est) >= 0.9

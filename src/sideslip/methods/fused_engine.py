@@ -66,7 +66,7 @@ from sideslip.models.fused_process import (
     U_AX,
     U_FY,
     U_QAX,
-    U_QAY,
+    U_QLAT,
     U_QWX,
     U_QWZ,
     U_WX,
@@ -136,11 +136,11 @@ def _predict(x, P, u, dt, cfg, q, rows, xn, Pn, F, dr, qk, tmp):
     qk[2] += arw2 * dt  # gyro noise enters psi, v_x, v_y through r
     qk[IVX] += (vrw2 + vy * vy * arw2) * dt
     qk[IVY] += (vrw2 + vx * vx * arw2) * dt
-    if u.size > U_QAY:  # inputs filled across a gap (sideslip.methods.input_gaps)
+    if u.size > U_QLAT:  # inputs filled across a gap (sideslip.methods.input_gaps)
         q_r = u[U_QWZ]
         qk[2] += q_r * dt
         qk[IVX] += (vy * vy * q_r + u[U_QAX]) * dt
-        qk[IVY] += (vx * vx * q_r + u[U_QAY]) * dt
+        qk[IVY] += u[U_QLAT] * dt
         qk[ICY] += G * G * u[U_QWX] * dt  # the roll gyro drives the bank (c_y)
     _, q_gm = gauss_markov_nb(dt, cfg[C_GM_TAU], cfg[C_GM_SIGMA])  # GNSS position error
     qk[IPE] += q_gm
@@ -359,9 +359,9 @@ def forward_nodes(
             ve1, vn1 = _nav_velocity(xn)
             chk[0] += ve1 - ve0
             chk[1] += vn1 - vn0
-            if U.shape[1] > U_QAY:  # a gap's fill error moves the carried velocity too
+            if U.shape[1] > U_QLAT:  # a gap's fill error moves the carried velocity too
                 uq = U[k - 1]
-                chk[2] += (x[IVX] ** 2 * uq[U_QWZ] + uq[U_QAX] + uq[U_QAY]) * (tn[k] - tn[k - 1])
+                chk[2] += (x[IVX] ** 2 * uq[U_QWZ] + uq[U_QAX] + uq[U_QLAT]) * (tn[k] - tn[k - 1])
             chk[7] += U[k - 1, U_WX] * (tn[k] - tn[k - 1])
             chk[9] += U[k - 1, U_WX] * (tn[k] - tn[k - 1])
             _track_road_roll(chk, tn[k] - tn[k - 1], U[k, U_FY], cfg)

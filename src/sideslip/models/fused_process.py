@@ -61,8 +61,11 @@ IE, IN, IPSI, IVX, IVY, IBG, ICY, ICX, ISW, ISG, IPE, IPN, ISF, ISR, IMU = range
 ITAU, ILX, ILY = range(NX_CORE, NX_CORE + NX_GNSS_CAL)
 U_WZ, U_WX, U_WY, U_AX, U_AY, U_FY, U_RR = range(7)
 # process noise densities of the inputs' gap fills (sideslip.methods.input_gaps): yaw gyro
-# (rad^2/s), roll gyro (rad^2/s), longitudinal and lateral accelerometer ((m/s)^2/s)
-U_QWZ, U_QWX, U_QAX, U_QAY = range(7, 11)
+# (rad^2/s), roll gyro (rad^2/s), longitudinal accelerometer ((m/s)^2/s), and the lateral
+# kinematic residual a_y - v w_z ((m/s)^2/s: held or interpolated together, the lateral
+# reading and the yaw rate err together, a_y by about v times the rate's error in a turn, so
+# v_y's error is their difference's, not the sum of both)
+U_QWZ, U_QWX, U_QAX, U_QLAT = range(7, 11)
 ATT_CLAMP = 0.6  # |sin| of bank / pitch beyond which the offsets are taken as sensor faults
 
 STATE_NAMES = (
