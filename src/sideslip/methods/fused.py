@@ -585,7 +585,10 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     rebuild = n > LONG_DRIVE_ROWS
     # the lateral kinematic residual a_y - v w_z with its gaps (v_y's input error in a gap:
     # the fills of a_y and w_z err together, sideslip.models.fused_process.U_QLAT)
-    filled["lat"] = fill_input(t, drive["ay"] - v_held * drive["wz"], interpolate=smooth)
+    if filled["ay"].sigma.any() or filled["wz"].sigma.any():
+        filled["lat"] = fill_input(t, drive["ay"] - v_held * drive["wz"], interpolate=smooth)
+    else:  # no gap in either: none in their difference
+        filled["lat"] = filled["ay"]
     dop_params: dict[str, Any] = {}
     # the antenna ahead of and above the IMU, and the rear axle behind the CG (m)
     ahead, above = (g - i for g, i in zip(vehicle.gnss_xyz[::2], vehicle.imu_xyz[::2], strict=True))
@@ -616,7 +619,8 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     # a gap's fill of the lateral reading is one error over the whole gap, in every axle
     # relation inside it: its variance quoted per axle_error_tau_s like the relations' own
     fa = filled["ay"]
-    force_var = force_var + fa.sigma**2 * np.maximum(fa.gap_s / nz.axle_error_tau_s, 1.0)
+    if fa.sigma.any():
+        force_var = force_var + fa.sigma**2 * np.maximum(fa.gap_s / nz.axle_error_tau_s, 1.0)
     # and a gap's yaw rate is in the rear slip (v_y - l_r r) / v_x: C_r l_r / v_x times its
     # error in force (race lap without GNSS, eight 0.5 s holes in the gyro: fused_filter
     # 2.05 deg with 89 % inside 2 sigma without it)

@@ -60,11 +60,12 @@ def fill_input(t: FloatArray, values: FloatArray, interpolate: bool) -> Filled:
     n = t.size
     v = np.asarray(values, dtype=float)
     ok = np.isfinite(v)
-    sigma = np.zeros(n)
     step = np.diff(t, prepend=t[0]) if n else np.zeros(0)
     pause = step > PAUSE_STEPS * float(np.median(step[1:])) if n > 2 else np.zeros(n, dtype=bool)
-    if not ok.any() or (ok.all() and not pause.any()):  # one zero array for both (read only)
-        return Filled(v.copy() if ok.all() else np.zeros(n), sigma, sigma)
+    if not ok.any() or (ok.all() and not pause.any()):
+        none = np.broadcast_to(np.float64(0.0), (n,))  # read-only zeros without the memory
+        return Filled(v.copy() if ok.all() else np.zeros(n), none, none)
+    sigma = np.zeros(n)
     ts, vs = t[ok], v[ok]
     rows = np.arange(n)
     prev = np.where(ok, rows, -1)
