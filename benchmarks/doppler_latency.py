@@ -19,11 +19,11 @@ Run: ``.venv/bin/python benchmarks/doppler_latency.py [--scenario S ...]``.
 
 from __future__ import annotations
 
-import argparse
 import datetime as dt
 from pathlib import Path
 
 from compare_methods import two_sigma_share
+from results_file import scenario_main
 
 from sideslip.evaluate import metrics
 from sideslip.methods.registry import run_method
@@ -82,15 +82,5 @@ def run(scenarios: tuple[str, ...]) -> str:
     return "\n".join(lines) + "\n"
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--scenario", action="append", help="only these scenarios (printed, not written)")
-    args = parser.parse_args()
-    text = run(tuple(args.scenario) if args.scenario else SCENARIOS)
-    if not args.scenario:
-        OUT.write_text(text)
-        print(f"wrote {OUT}")
-
-
 if __name__ == "__main__":
-    main()
+    scenario_main(__doc__, run, SCENARIOS, OUT)

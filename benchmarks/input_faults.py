@@ -14,7 +14,6 @@ Run: ``.venv/bin/python benchmarks/input_faults.py [--scenario S ...]``.
 
 from __future__ import annotations
 
-import argparse
 import datetime as dt
 from collections.abc import Callable
 from dataclasses import replace
@@ -22,6 +21,7 @@ from pathlib import Path
 
 import numpy as np
 from compare_methods import two_sigma_share
+from results_file import scenario_main
 
 from sideslip.drive import Drive, drive_from_columns
 from sideslip.evaluate import metrics
@@ -119,15 +119,5 @@ def run(scenarios: tuple[str, ...]) -> str:
     return "\n".join(lines) + "\n"
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--scenario", action="append", help="only these scenarios (printed, not written)")
-    args = parser.parse_args()
-    text = run(tuple(args.scenario) if args.scenario else SCENARIOS)
-    if not args.scenario:
-        OUT.write_text(text)
-        print(f"wrote {OUT}")
-
-
 if __name__ == "__main__":
-    main()
+    scenario_main(__doc__, run, SCENARIOS, OUT)
