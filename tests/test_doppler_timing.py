@@ -82,3 +82,18 @@ def test_paper_methods_run_on_the_receivers_time(method, bound_deg) -> None:
     est = run_method(method, drive, vehicle)
     assert est.params["gnss_doppler_latency_applied_s"] == pytest.approx(0.2, abs=0.02)
     assert metrics(drive, est.series)["beta_rmse_deg"] < bound_deg
+
+
+def test_the_applied_latencys_sigma_reaches_the_paper_methods_beta_std() -> None:
+    """Epochs moved by a latency known to sigma: a residual tau lags the course by r tau, so
+    |r| sigma joins the method's own beta_std (cr_limit_ramp with a 5 Hz Doppler 200 ms late:
+    doppler_slip 75 -> 89 % inside 2 sigma, measured 2026-12-07)."""
+    drive = doppler_drive("race_lap", 0.2)
+    vehicle = load_vehicle(drive.meta["vehicle"])
+    est = run_method("doppler_slip", drive, vehicle)
+    moved, timing = drive_on_receiver_time(drive, vehicle)
+    assert timing is not None and timing.latency_s > 0.0 and timing.sigma_s > 0.005
+    method = get_method("doppler_slip")
+    own = method.func(moved, vehicle, method.default_settings())
+    expected = np.hypot(own["beta_std"], np.abs(own["r"]) * timing.sigma_s)
+    np.testing.assert_allclose(est["beta_std"], expected, rtol=1e-9)

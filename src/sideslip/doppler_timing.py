@@ -7,7 +7,8 @@ sideslip (seed 000's slip from the Doppler course: 100 ms late took urban_course
 times the Doppler without any tyre model; :func:`choose_doppler_latency` decides whether the
 drive has decided it, and :func:`drive_on_receiver_time` hands the GNSS methods that do not
 time the receiver themselves a drive whose epochs sit at their stamps less that latency
-(:func:`sideslip.methods.registry.run_method`; ``fused`` applies the same choice inside).
+(:func:`sideslip.methods.registry.run_method`, which adds |r| times the latency's sigma to
+their ``beta_std``; ``fused`` applies the same choice inside).
 """
 
 from __future__ import annotations
