@@ -14,6 +14,7 @@ their ``beta_std``; ``fused`` applies the same choice inside).
 from __future__ import annotations
 
 import math
+import threading
 import weakref
 from dataclasses import dataclass, replace
 
@@ -25,7 +26,8 @@ from sideslip.gnss_latency import LatencyEstimate, identify_doppler_latency
 from sideslip.vehicle import Vehicle
 
 __all__ = [
-    "DopplerTiming", "choose_doppler_latency", "drive_on_receiver_time", "forget_timings", "shift_gnss",
+    "DopplerTiming", "antenna_geometry", "choose_doppler_latency", "drive_on_receiver_time",
+    "forget_timings", "shift_gnss",
 ]  # fmt: skip
 
 # a Doppler latency is applied only when this decisive ...  (was 0.015 s, set when the speed
@@ -119,15 +121,18 @@ def shift_gnss(drive: Drive, latency_s: float) -> Drive:
 # methods of one `sideslip estimate` run time a drive once
 _TIMED: dict[int, tuple[weakref.ref[Drive], tuple[float, float, float], LatencyEstimate | None]] = {}
 _TIMED_MAX = 4
+_TIMED_LOCK = threading.Lock()  # a Dask worker's threads run methods side by side
 
 
 def forget_timings() -> None:
     """Drop the drives timed so far (a benchmark times each run from scratch)."""
-    _TIMED.clear()
+    with _TIMED_LOCK:
+        _TIMED.clear()
 
 
-def _geometry(vehicle: Vehicle) -> tuple[float, float, float]:
-    """The antenna ahead of and above the IMU, and the CG's distance to the rear axle (m)."""
+def antenna_geometry(vehicle: Vehicle) -> tuple[float, float, float]:
+    """The antenna ahead of and above the IMU, and the CG's distance to the rear axle (m):
+    the geometry :func:`sideslip.gnss_latency.identify_doppler_latency` takes."""
     ahead = float(vehicle.gnss_xyz[0] - vehicle.imu_xyz[0])
     above = float(vehicle.gnss_xyz[2] - vehicle.imu_xyz[2])
     return ahead, above, float(vehicle.lr)
@@ -136,15 +141,17 @@ def _geometry(vehicle: Vehicle) -> tuple[float, float, float]:
 def timing_of(drive: Drive, vehicle: Vehicle, prior_sigma_s: float) -> DopplerTiming:
     """:func:`choose_doppler_latency` for ``drive`` (fitted once per drive and vehicle
     geometry while the drive lives)."""
-    geometry = _geometry(vehicle)
-    hit = _TIMED.get(id(drive))
+    geometry = antenna_geometry(vehicle)
+    with _TIMED_LOCK:
+        hit = _TIMED.get(id(drive))
     if hit is not None and hit[0]() is drive and hit[1] == geometry:
         fit = hit[2]
     else:
         fit = identify_doppler_latency(drive, *geometry)
-        while len(_TIMED) >= _TIMED_MAX:
-            _TIMED.pop(next(iter(_TIMED)))
-        _TIMED[id(drive)] = (weakref.ref(drive), geometry, fit)
+        with _TIMED_LOCK:
+            while len(_TIMED) >= _TIMED_MAX:
+                _TIMED.pop(next(iter(_TIMED)))
+            _TIMED[id(drive)] = (weakref.ref(drive), geometry, fit)
     return choose_doppler_latency(fit, prior_sigma_s)
 
 

@@ -224,16 +224,15 @@ def run_method(method: str | Method, drive: Drive, vehicle: Vehicle, settings: A
     if moved_note is not None:
         est = Estimate(est.method, est.t, est.series, {**est.params, "accelerometer_at_cg": moved_note},
                        est.innovations)  # fmt: skip
-    if timing is not None and timing.latency_s > 0.0 and "beta_std" in est.series:
-        # the epochs moved by a latency known to timing.sigma_s: a residual tau lags the
-        # course by r tau, read as slip (cr_limit_ramp, 5 Hz Doppler 200 ms late, read
-        # 0.195 +- 0.030 s: doppler_slip 75 % inside 2 sigma without this term)
-        rate = est.series["r"] if "r" in est.series else np.nan_to_num(drive["wz"])
-        series = dict(est.series)
-        series["beta_std"] = np.hypot(est.series["beta_std"], np.abs(rate) * timing.sigma_s)
-        est = Estimate(est.method, est.t, series, est.params, est.innovations)
     if timing is not None:
-        est = Estimate(est.method, est.t, est.series, {
+        series = dict(est.series)
+        if timing.latency_s > 0.0 and "beta_std" in series:
+            # the epochs moved by a latency known to timing.sigma_s: a residual tau lags the
+            # course by r tau, read as slip (cr_limit_ramp, 5 Hz Doppler 200 ms late, read
+            # 0.195 +- 0.030 s: doppler_slip 75 % inside 2 sigma without this term)
+            rate = series["r"] if "r" in series else np.nan_to_num(drive["wz"])
+            series["beta_std"] = np.hypot(series["beta_std"], np.abs(rate) * timing.sigma_s)
+        est = Estimate(est.method, est.t, series, {
             **est.params, "gnss_doppler_latency_applied_s": timing.latency_s,
             "gnss_doppler_latency_applied_note": timing.note,
         }, est.innovations)  # fmt: skip
