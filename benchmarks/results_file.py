@@ -25,6 +25,8 @@ def scenario_main(doc: str, run: Callable[[tuple[str, ...]], str], scenarios: tu
     parser.add_argument("--scenario", action="append", help="only these scenarios (printed, not written)")
     args = parser.parse_args()
     text = run(tuple(args.scenario) if args.scenario else scenarios)
-    if not args.scenario:
+    if args.scenario:
+        print(text)
+    else:
         out.write_text(text)
         print(f"wrote {out}")

@@ -8,6 +8,7 @@ import math
 import numpy as np
 import pytest
 
+from sideslip.drive import Drive
 from sideslip.evaluate import SPEED_GATE, metrics
 from sideslip.frames import wrap_angle
 from sideslip.methods.fused import FusedSettings, fuse
@@ -198,7 +199,10 @@ def test_fused_is_level_with_the_zeroed_linear_graph_on_a_steady_bank():
 def test_beta_std_covers_the_error(scenario, factor):
     """Calibration: a Gaussian 2-sigma covers 95 % of errors.  At least 90 % inside 2 sigma,
     also at the limit (race_lap) and on CommonRoad drives with a 30 %-off file, and sigma not
-    more than 14x the actual RMS error (measured: 100 %; RMS sigma / RMS error 4.4 on
+    more than 20x the actual RMS error (measured with the trapezoidal rule, 2026-12-07: 100 %;
+    RMS sigma / RMS error 5.2 demo, 5.9 urban_course, 6.7 two_turns_gyro_sf, 6.6 race_lap,
+    6.9 cr_circle, 17.2 cr_step_steer, whose error fell 0.035 -> 0.022 deg under the same
+    sigma, the latency term below.  Before it, with the rectangle rule: 4.4 on
     race_lap .. 12.5 on cr_circle and 10.7 on cr_step_steer, 5.4 and 8.4 before the process
     noise was read from the drive: their errors fell 0.120 -> 0.051 and 0.045 -> 0.035 deg,
     the sigma did not, since the latency term below sets it).  What widens sigma most
@@ -216,7 +220,7 @@ def test_beta_std_covers_the_error(scenario, factor):
     err = np.abs(wrap_angle(est["beta"] - drive["ref_beta"]))[gate]
     std = est["beta_std"][gate]
     assert two_sigma_share(drive, est) > 0.90
-    assert np.sqrt(np.mean(std**2)) < 14 * np.sqrt(np.mean(err**2))
+    assert np.sqrt(np.mean(std**2)) < 20 * np.sqrt(np.mean(err**2))
 
 
 def test_rear_stiffness_is_identified_from_a_wrong_vehicle_file():
@@ -261,16 +265,22 @@ def test_position_through_the_demo_outage_stays_inside_its_own_ellipse():
     assert np.all(err < 3 * sd)
 
 
-def test_filter_is_causal():
+@pytest.mark.parametrize("gnss", [True, False])
+def test_filter_is_causal(gnss: bool):
     """fused_filter at row k must not depend on data after row k (it is the on-line form)
     with whole_drive_calibration off; with it on (the default) the calibrations read from the
-    whole drive (noise levels, roll gyro bias) make the first half differ."""
+    whole drive (noise levels, roll gyro bias) make the first half differ.  The cut falls two
+    rows into a 50 ms node step: the node updates once read their step's later rows (a 40 ms
+    look-ahead at 100 Hz) and differed there; now they read the rows up to their own."""
     drive = sim_drive("dlc_bank")
+    if not gnss:
+        drive = Drive(drive.t, {k: v for k, v in drive.data.items() if not k.startswith("gnss_")}, drive.meta)
     v = load_vehicle(drive.meta["vehicle"])
     online = FusedSettings(whole_drive_calibration=False)
     full = fuse(drive, v, smooth=False, settings=online)
-    half = fuse(drive.slice(0, len(drive) // 2), v, smooth=False, settings=online)
-    np.testing.assert_allclose(half["beta"], full["beta"][: len(drive) // 2], atol=1e-12)
+    cut = len(drive) // 2 + 2
+    half = fuse(drive.slice(0, cut), v, smooth=False, settings=online)
+    np.testing.assert_allclose(half["beta"], full["beta"][:cut], atol=1e-12)
     calibrated = fuse(drive, v, smooth=False)
     assert not np.allclose(calibrated["beta"], full["beta"], atol=1e-9)
 
@@ -431,13 +441,14 @@ def test_a_doppler_200_ms_late_is_taken_where_a_few_turns_decide_it() -> None:
     assert two_sigma_share(drive, est) > 0.9
 
 
-def test_a_coarse_log_keeps_its_inputs_timing_inside_beta_std() -> None:
-    """Seed 002's race lap logged at 20 Hz (every fifth row; the 10 Hz GNSS epochs all kept):
-    each step takes its rows' mean, half a row (25 ms) behind the interval it propagates
-    over, and against the Doppler that lag reads r x 25 ms as slip (0.311 deg beta RMSE
-    against 0.048 at 100 Hz).  beta_std now carries |r| times half a row with the latency's
-    sigma: 93.7 -> 99.0 % of the errors inside 2 sigma (measured 2026-12-07); at 100 Hz it
-    widens beta_std by 1 % on average over the comparison's Doppler drives."""
+def test_a_coarse_log_with_doppler_integrates_its_inputs_on_time() -> None:
+    """Seed 002's race lap logged at 20 Hz (every fifth row; the 10 Hz GNSS epochs all kept).
+    With each step taking its rows' mean (rectangle rule), the kinematics ran half a row
+    (25 ms) behind the interval they propagate over, and against the Doppler that lag read
+    r x 25 ms as slip: 0.311 deg beta RMSE (0.048 at 100 Hz) with 93.7 % inside 2 sigma.
+    With the trapezoidal rule where Doppler is present: 0.037 deg, 100 % (measured
+    2026-12-07); beta_std keeps |r| times half a row for what a sample stands for.  0.1 deg
+    is between the two, three times the measured error."""
     from sideslip.drive import drive_from_columns
 
     whole = sim_drive("race_lap")
@@ -445,6 +456,7 @@ def test_a_coarse_log_keeps_its_inputs_timing_inside_beta_std() -> None:
     keep[::5] = True
     drive = drive_from_columns({"t": whole.t[keep], **{k: np.asarray(v)[keep] for k, v in whole.data.items()}})
     est = run_method("fused", drive, load_vehicle(whole.meta["vehicle"]))
+    assert metrics(drive, est.series)["beta_rmse_deg"] < 0.1
     assert two_sigma_share(drive, est) >= 0.97
 
 

@@ -23,6 +23,23 @@ def test_block_means_equal_reduceat_over_each_nodes_rows() -> None:
         np.testing.assert_allclose(U[:, c], np.add.reduceat(col, idx) / counts, rtol=1e-13)
 
 
+def test_trapezoidal_node_inputs_integrate_a_sampled_ramp_exactly() -> None:
+    """The first ``n_trap`` columns take the trapezoidal mean over [idx[j], idx[j+1]]: for a
+    ramp sampled at its instants that is the ramp's value at the interval's middle (the
+    rectangle rule's block mean sits half a row earlier); later columns keep the block mean,
+    and the last node (no row after it) keeps its rows' mean."""
+    ramp = 0.3 * np.arange(103.0)
+    other = np.random.default_rng(3).normal(size=103)
+    idx = np.array([0, 5, 10, 11, 40, 100])
+    U = eng.block_means(idx, (ramp, other), 1)
+    mid = 0.3 * 0.5 * (idx[:-1] + idx[1:])
+    np.testing.assert_allclose(U[:-1, 0], mid, rtol=1e-13)
+    np.testing.assert_allclose(U[-1, 0], ramp[100:].mean(), rtol=1e-13)
+    rect = eng.block_means(idx, (ramp, other))
+    np.testing.assert_allclose(U[:-1, 0] - rect[:-1, 0], 0.3 * 0.5, rtol=1e-12)  # half a row
+    np.testing.assert_array_equal(U[:, 1], rect[:, 1])
+
+
 def test_node_interpolation_equals_np_interp_including_the_ends() -> None:
     rng = np.random.default_rng(1)
     tn = np.cumsum(rng.uniform(0.01, 0.1, 50))

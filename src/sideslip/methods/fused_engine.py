@@ -1,11 +1,14 @@
 """The fused estimator's compiled loop: forward EKF over the filter's nodes, RTS backward pass.
 
-Nodes are drive rows taken every ``stride`` rows (the smoother's step, e.g. 40 ms on a 100 Hz
-drive; every row for the causal filter).  The prediction from node j to node j+1 uses the mean
-of the IMU samples between them; each node then takes, in order, the wheel-speed (or standstill)
-update, the rear- and front-axle force relations, and every GNSS epoch stamped since the
-previous node (with its age, see :func:`sideslip.models.fused_measurements.gnss_position`;
-each Doppler epoch first checked against the inertial propagation, :func:`_doppler_check`).
+Nodes are drive rows taken every ``stride`` rows (``FusedSettings.step_s``, 50 ms: every fifth
+row of a 100 Hz drive, every row of a 20 Hz one) and every GNSS epoch's row.  The inputs
+``U`` (2, N, m) are built by ``sideslip.methods.fused._node_inputs``: the prediction from node
+j to node j+1 uses ``U[0, j]``, the mean of the IMU samples over the step (rectangle or
+trapezoidal rule), the updates at node j ``U[1, j]``.  Each node then takes, in order, the
+wheel-speed (or standstill) update, the rear- and front-axle force relations, and every GNSS
+epoch stamped since the previous node (with its age, see
+:func:`sideslip.models.fused_measurements.gnss_position`; each Doppler epoch first checked
+against the inertial propagation, :func:`_doppler_check`).
 Models: :mod:`sideslip.models.fused_process`, :mod:`sideslip.models.fused_measurements`;
 kernels: :mod:`sideslip.filters.kalman`.
 
@@ -353,22 +356,22 @@ def forward_nodes(
     chk = new_doppler_check()  # _doppler_check's state
     for k in range(N):
         if k > 0:
-            _predict(x, P, U[k - 1], tn[k] - tn[k - 1], cfg, q, rows, xn, Pn, F, dr, qk, tmp)
+            _predict(x, P, U[0, k - 1], tn[k] - tn[k - 1], cfg, q, rows, xn, Pn, F, dr, qk, tmp)
             # the Doppler check follows the inertial prediction only, not the updates
             ve0, vn0 = _nav_velocity(x)
             ve1, vn1 = _nav_velocity(xn)
             chk[0] += ve1 - ve0
             chk[1] += vn1 - vn0
-            if U.shape[1] > U_QLAT:  # a gap's fill error moves the carried velocity too
-                uq = U[k - 1]
+            if U.shape[2] > U_QLAT:  # a gap's fill error moves the carried velocity too
+                uq = U[0, k - 1]
                 chk[2] += (x[IVX] ** 2 * uq[U_QWZ] + uq[U_QAX] + uq[U_QLAT]) * (tn[k] - tn[k - 1])
-            chk[7] += U[k - 1, U_WX] * (tn[k] - tn[k - 1])
-            chk[9] += U[k - 1, U_WX] * (tn[k] - tn[k - 1])
-            _track_road_roll(chk, tn[k] - tn[k - 1], U[k, U_FY], cfg)
+            chk[7] += U[0, k - 1, U_WX] * (tn[k] - tn[k - 1])
+            chk[9] += U[0, k - 1, U_WX] * (tn[k] - tn[k - 1])
+            _track_road_roll(chk, tn[k] - tn[k - 1], U[1, k, U_FY], cfg)
             x[:] = xn
             P[:, :] = Pn
         dtk = tn[k] - tn[k - 1] if k > 0 else 0.0
-        u = U[k]
+        u = U[1, k]
         still = math.isfinite(vw[k]) and abs(vw[k]) < cfg[C_STILL_SPEED]
         if still:
             # ---- standstill: zero velocity and zero yaw rate
@@ -605,7 +608,7 @@ def smoother_gains(k0, k1, xs, Ps, U, tn, cfg, q, rows, XN, PN, B):
         j = k - k0
         unpack_upper_nb(Ps[k], Pk)
         xk[:] = xs[k]
-        _predict(xk, Pk, U[k], tn[k + 1] - tn[k], cfg, q, rows, XN[j], PN[j], F, dr, qk, tmp)
+        _predict(xk, Pk, U[0, k], tn[k + 1] - tn[k], cfg, q, rows, XN[j], PN[j], F, dr, qk, tmp)
         rts_gain_ws_nb(Pk, PN[j], F, rows, B[j], L)
 
 
@@ -677,9 +680,12 @@ def run_nodes(
 
 
 @numba.njit(cache=True)
-def block_means(idx, cols):
+def block_means(idx, cols, n_trap=0):
     """Node inputs: the mean of each column of ``cols`` (a tuple of per-row arrays) over the
-    rows [idx[j], idx[j+1]) of node j (the last node: its rows to the end), shape (N, len)."""
+    rows [idx[j], idx[j+1]) of node j (the last node: its rows to the end), shape (N, len).
+    The first ``n_trap`` columns instead take the trapezoidal rule over the interval
+    [idx[j], idx[j+1]] (half weights on its two end rows), the mean of a signal sampled at
+    its instants over the interval it propagates over."""
     N = idx.size
     n = cols[0].size
     m = len(cols)
@@ -690,8 +696,12 @@ def block_means(idx, cols):
         for c in range(m):
             col = cols[c]
             acc = 0.0
-            for i in range(lo, hi):
-                acc += col[i]
+            if c < n_trap and j + 1 < N:
+                for i in range(lo, hi):
+                    acc += 0.5 * (col[i] + col[i + 1])
+            else:
+                for i in range(lo, hi):
+                    acc += col[i]
             U[j, c] = acc / max(hi - lo, 1)
     return U
 

@@ -16,8 +16,10 @@ sigma.  The file's antenna is kept unless the drive contradicts it twice: where 
 exceeds ``z_gate`` sigmas, and the forward filter with the tyres predicts the Doppler better
 with the antenna moved by ``dl_x`` than with the file's, by more than ``z_gate^2`` in
 ``-2 log L`` (``LeverCheck.gain``, computed by the caller).
-Before the first test the part of ``dl_x`` that is the node inputs' timing is taken out:
-each node's inputs are the mean of its rows, half a row behind the interval they propagate
+Before the first test the part of ``dl_x`` that is the node inputs' timing is taken out
+where they have one (``lagged``; the smoother's default integrates with the trapezoidal rule
+where Doppler is present, which has none): with the rectangle rule each node's inputs are
+the mean of its rows, half a row behind the interval they propagate
 over, so against the Doppler the kinematics run half a row late, which in turns reads as an
 antenna ``v dt / 2`` ahead (the race lap with the antenna where the file says: +0.163 +-
 0.023 m found, 0.108 m of it this; fused_accuracy.md session 8), and since an IMU sample may
@@ -62,6 +64,7 @@ class LeverCheck:
     z_gate: float
     gain: float = math.nan
     timing_m: float = 0.0  # the part of dl_x_m the node inputs' half-row lag accounts for
+    timing_sigma_m: float | None = None  # the timing's uncertainty (m); None: timing_m
 
     @property
     def z(self) -> float:
@@ -69,7 +72,8 @@ class LeverCheck:
         the timing is itself uncertain by as much again (an IMU sample may stand for its
         instant or for the interval before it), which widens the sigma."""
         off = abs(self.dl_x_m - self.timing_m)
-        sigma = math.hypot(self.sigma_m, self.timing_m)
+        timing_sigma = self.timing_m if self.timing_sigma_m is None else self.timing_sigma_m
+        sigma = math.hypot(self.sigma_m, timing_sigma)
         return off / sigma if sigma > 0.0 else math.inf
 
     @property
@@ -128,6 +132,7 @@ def check_lever(
     latency_psd: float,
     z_gate: float,
     row_dt_s: float,
+    lagged: bool = True,
 ) -> LeverCheck:
     """The smoother of :func:`sideslip.methods.fused_engine.run_nodes` (``before``, ``g_age``
     as its arguments; ``free`` its trailing arguments with the core states only, from
@@ -137,10 +142,12 @@ def check_lever(
     (a constant's smoothed sigma).
 
     ``row_dt_s`` (the drive's row interval) sizes the part of ``dl_x`` that is the node
-    inputs' timing: each node's inputs are the mean of its rows, centred half a row before
-    the interval they propagate over, so against the Doppler the kinematics run
-    ``row_dt_s / 2`` late, which in a turn reads as ``r v row_dt_s / 2``, an antenna
-    ``v row_dt_s / 2`` ahead (v weighted by r^2, as the turns inform dl_x)."""
+    inputs' timing: with the rectangle rule (``lagged``) each node's inputs are the mean of
+    its rows, centred half a row before the interval they propagate over, so against the
+    Doppler the kinematics run ``row_dt_s / 2`` late, which in a turn reads as
+    ``r v row_dt_s / 2``, an antenna ``v row_dt_s / 2`` ahead (v weighted by r^2, as the
+    turns inform dl_x).  Either way that much is the timing's uncertainty (a sample may
+    stand for its instant or for the interval before it)."""
     g_e, g_n, pstd, ve, vn, vstd, x0, P0, q, _, axle, lever, cfg, _ = free
     nx = NX_CORE + NX_GNSS_CAL
     x0c = np.zeros(nx)
@@ -163,7 +170,7 @@ def check_lever(
     sigma = float(math.sqrt(max(float(var_last[ILX]), 0.0)))
     if not (math.isfinite(dl) and math.isfinite(sigma)):
         return LeverCheck(math.nan, math.inf, z_gate)
-    r2 = np.square(before[1][:, 0])  # the gyro's z rate at the nodes
+    r2 = np.square(before[1][1, :, 0])  # the gyro's z rate at the nodes
     v_turns = float(np.sum(r2 * xs[:, IVX]) / np.sum(r2)) if np.sum(r2) > 0.0 else 0.0
     timing = v_turns * row_dt_s / 2.0 if math.isfinite(v_turns) else 0.0
-    return LeverCheck(dl, sigma, z_gate, timing_m=timing)
+    return LeverCheck(dl, sigma, z_gate, timing_m=timing if lagged else 0.0, timing_sigma_m=timing)

@@ -22,6 +22,19 @@ class FusedSettings:
     for a MEMS IMU, automotive wheel speeds and a u-blox M8-class receiver."""
 
     step_s: float = 0.05  # s: node spacing (0: every row); inputs averaged between nodes
+    # the prediction's inputs over a node step by the trapezoidal rule (half weights on the
+    # step's two end rows: on time for samples taken at their instants) where GNSS Doppler
+    # measures the velocities it integrates; else the rows' mean (rectangle rule), half a
+    # row late.  Measured 2026-12-07, 16 scenarios x 3 files, fused beta RMSE mean with
+    # Doppler (right / soft / rough file): at 100 Hz 0.041 / 0.049 / 0.052 -> 0.042 / 0.055
+    # / 0.059 (race_lap 0.048 -> 0.033, step_steer 0.019 -> 0.039), at 20 Hz 0.148 / 0.127
+    # / 0.123 -> 0.060 / 0.072 / 0.073 (race_lap 0.311 -> 0.037); fused_filter at 100 Hz
+    # 0.106 / 0.113 / 0.111 -> 0.110 / 0.126 / 0.123, at 20 Hz 0.152 / 0.149 / 0.121 ->
+    # 0.102 / 0.122 / 0.121.  Without Doppler the tyres carry the slip and learn the
+    # stiffness in the transients, where the half-row lag measured better (at 20 Hz, no
+    # GNSS: 0.099 -> 0.115 with the trapezoid; positions only 0.070 -> 0.079), so it is kept
+    # there; the comma2k19 minute and the Revs lap (both 100 Hz) are unchanged within 0.003
+    trapezoid_with_doppler: bool = True
     accel_vrw_psd: float = 0.1  # m/s/sqrt(s): accelerometer noise, vibration, roll transients
     # with GNSS Doppler the velocity random walk is read from the drive: the value (a factor
     # of two apart, from accel_vrw_psd times min_factor to max_factor, never below the
