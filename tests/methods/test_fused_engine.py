@@ -14,30 +14,49 @@ from sideslip.vehicle import G
 
 
 def test_block_means_equal_reduceat_over_each_nodes_rows() -> None:
+    """On evenly spaced rows the rectangle rule's time-weighted mean is the rows' mean, and
+    the columns after ``n_inputs`` (the gap fills' increments) are the rows' mean anyway."""
     rng = np.random.default_rng(0)
     cols = tuple(rng.normal(size=103) for _ in range(3))
+    t = 0.01 * np.arange(103.0)
     idx = np.array([0, 5, 10, 11, 40, 100])
-    U = eng.block_means(idx, cols)
     counts = np.diff(np.append(idx, 103))
-    for c, col in enumerate(cols):
-        np.testing.assert_allclose(U[:, c], np.add.reduceat(col, idx) / counts, rtol=1e-13)
+    for n_inputs in (0, 2):
+        U = eng.block_means(idx, cols, t, n_inputs, False)
+        for c, col in enumerate(cols):
+            np.testing.assert_allclose(U[:, c], np.add.reduceat(col, idx) / counts, rtol=1e-12)
 
 
 def test_trapezoidal_node_inputs_integrate_a_sampled_ramp_exactly() -> None:
-    """The first ``n_trap`` columns take the trapezoidal mean over [idx[j], idx[j+1]]: for a
-    ramp sampled at its instants that is the ramp's value at the interval's middle (the
-    rectangle rule's block mean sits half a row earlier); later columns keep the block mean,
-    and the last node (no row after it) keeps its rows' mean."""
-    ramp = 0.3 * np.arange(103.0)
-    other = np.random.default_rng(3).normal(size=103)
-    idx = np.array([0, 5, 10, 11, 40, 100])
-    U = eng.block_means(idx, (ramp, other), 1)
-    mid = 0.3 * 0.5 * (idx[:-1] + idx[1:])
-    np.testing.assert_allclose(U[:-1, 0], mid, rtol=1e-13)
-    np.testing.assert_allclose(U[-1, 0], ramp[100:].mean(), rtol=1e-13)
-    rect = eng.block_means(idx, (ramp, other))
-    np.testing.assert_allclose(U[:-1, 0] - rect[:-1, 0], 0.3 * 0.5, rtol=1e-12)  # half a row
-    np.testing.assert_array_equal(U[:, 1], rect[:, 1])
+    """The trapezoidal rule's mean over [t[idx[j]], t[idx[j+1]]]: for a ramp sampled at its
+    instants, the ramp's value at the interval's middle, evenly spaced or not (the rectangle
+    rule's mean sits half a row earlier); the last node (no row after it) keeps its rows'
+    mean."""
+    rng = np.random.default_rng(3)
+    for t in (0.01 * np.arange(103.0), np.cumsum(rng.uniform(0.005, 0.03, 103))):
+        ramp = 0.3 + 2.0 * t
+        idx = np.array([0, 5, 10, 11, 40, 100])
+        U = eng.block_means(idx, (ramp,), t, 1, True)
+        mid = 0.3 + 2.0 * 0.5 * (t[idx[:-1]] + t[idx[1:]])
+        np.testing.assert_allclose(U[:-1, 0], mid, rtol=1e-12)
+        np.testing.assert_allclose(U[-1, 0], ramp[100:].mean(), rtol=1e-12)
+    rect = eng.block_means(idx, (ramp,), t, 1, False)
+    assert np.all(rect[:-1, 0] < U[:-1, 0])
+
+
+def test_a_pause_inside_a_node_step_counts_for_its_duration() -> None:
+    """Rows 10 ms apart but one 2 s step (a pause of the logger): the node step over it takes
+    the sample before the pause for 2 s of its 2.04 s (rectangle rule), or the mean of the
+    samples on both sides (trapezoidal), not one fifth of the step as a row mean would."""
+    t = np.concatenate([0.01 * np.arange(8), 2.07 + 0.01 * np.arange(8)])
+    col = np.where(t < 1.0, 1.0, 3.0)
+    idx = np.array([0, 5, 10, 15])  # node 1 spans rows 5..10: the pause is t[7] -> t[8]
+    rect = eng.block_means(idx, (col,), t, 1, False)
+    trap = eng.block_means(idx, (col,), t, 1, True)
+    span = t[10] - t[5]
+    np.testing.assert_allclose(rect[1, 0], (1.0 * (t[8] - t[5]) + 3.0 * (t[10] - t[8])) / span, rtol=1e-12)
+    np.testing.assert_allclose(trap[1, 0], (1.0 * (t[7] - t[5]) + 2.0 * 2.0 + 3.0 * (t[10] - t[8])) / span, rtol=1e-12)
+    assert rect[1, 0] < 1.05 and 1.9 < trap[1, 0] < 2.1
 
 
 def test_node_interpolation_equals_np_interp_including_the_ends() -> None:

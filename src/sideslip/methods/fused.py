@@ -802,7 +802,7 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
         # the antenna's lateral lever arm from the same tyre-free fit (sideslip.gnss_latency),
         # with the file's value as the prior's mean
         lever[1] = latency.lever_y_posterior(lever[1], nz.lever_prior_sigma_m)[0]
-    if idx.size == n:  # the causal filter: its nodes are the rows (no copies)
+    if idx.size == n:  # every row a node (a 20 Hz table, or step_s 0): no copies
         node_inputs = (f_front, f_rear, delta, mu_floor, steady, force_var)
     else:
         node_inputs = (f_front[idx], f_rear[idx], delta[idx], mu_floor[idx], steady[idx], force_var[idx])
@@ -1089,17 +1089,18 @@ def _node_inputs(
     to j + 1, ``U[1, j]`` the updates at node j; columns ``inputs`` (U_WZ .. U_RR) then the
     gap fills' noise densities ``q_gap`` (U_QWZ ..).
 
-    Prediction: the mean of the rows [idx[j], idx[j+1]) (rectangle rule: an IMU sample at its
-    instant stands for the interval after it, so the kinematics run half a row late), or with
-    ``trapezoid`` each input's trapezoidal mean over [t[idx[j]], t[idx[j+1]]] (no lag for
-    samples taken at their instants).  Updates at node j: the same block mean of the rows
-    from idx[j] on for the smoother; for the causal filter the node's own row, so that no
-    update reads a row after its node (the block mean had it read the step's later rows, a
-    40 ms look-ahead at 100 Hz; the mean of the rows up to the node lags by as much, and on
-    the comparison's drives did no better than the single row)."""
+    Prediction: each input's mean over [t[idx[j]], t[idx[j+1]]] by the rectangle rule (an
+    IMU sample at its instant stands for the interval after it, so the kinematics run half a
+    row late) or with ``trapezoid`` by the trapezoidal rule (no lag for samples taken at
+    their instants), weighted by time (:func:`sideslip.methods.fused_engine.block_means`).
+    Updates at node j: the rectangle rule's mean for the smoother; for the causal filter
+    the node's own row, so that no update reads a row after its node (the block mean had it
+    read the step's later rows, a 40 ms look-ahead at 100 Hz; the mean of the rows up to the
+    node lags by as much, and on the comparison's drives did no better than the single
+    row)."""
     n = t.size
     N = idx.size
-    prop = eng.block_means(idx, (*inputs, *q_gap), len(inputs) if trapezoid else 0)
+    prop = eng.block_means(idx, (*inputs, *q_gap), t, len(inputs), trapezoid)
     rows_per_node = np.diff(np.append(idx, n))
     if any(q.any() for q in q_gap):
         # the gap columns: block sums of per-row increments, per second of the node step
@@ -1111,7 +1112,7 @@ def _node_inputs(
         U[1] = prop
         U[1, :, : len(inputs)] = np.column_stack([col[idx] for col in inputs])
     elif trapezoid:
-        U[1] = eng.block_means(idx, (*inputs, *q_gap), 0)
+        U[1] = eng.block_means(idx, (*inputs, *q_gap), t, len(inputs), False)
     else:
         U[1] = prop
     return U

@@ -680,12 +680,14 @@ def run_nodes(
 
 
 @numba.njit(cache=True)
-def block_means(idx, cols, n_trap=0):
-    """Node inputs: the mean of each column of ``cols`` (a tuple of per-row arrays) over the
-    rows [idx[j], idx[j+1]) of node j (the last node: its rows to the end), shape (N, len).
-    The first ``n_trap`` columns instead take the trapezoidal rule over the interval
-    [idx[j], idx[j+1]] (half weights on its two end rows), the mean of a signal sampled at
-    its instants over the interval it propagates over."""
+def block_means(idx, cols, t, n_inputs, trapezoid):
+    """Node inputs, shape (N, len(cols)): for node j the rows [idx[j], idx[j+1]) (the last
+    node: its rows to the end).  Columns from ``n_inputs`` on take the plain mean of those
+    rows.  The first ``n_inputs`` columns, signals sampled at their rows' times ``t``, take
+    their mean over the time [t[idx[j]], t[idx[j+1]]] the node propagates over: each row
+    standing for the interval after it (rectangle rule) or, with ``trapezoid``, each
+    interval the mean of its two end rows; weighted by the intervals' lengths, so that a
+    pause of the logger inside a step counts for its duration, not as one row."""
     N = idx.size
     n = cols[0].size
     m = len(cols)
@@ -693,16 +695,19 @@ def block_means(idx, cols, n_trap=0):
     for j in range(N):
         lo = idx[j]
         hi = idx[j + 1] if j + 1 < N else n
+        timed = j + 1 < N and t[hi] > t[lo]
         for c in range(m):
             col = cols[c]
             acc = 0.0
-            if c < n_trap and j + 1 < N:
+            if c < n_inputs and timed:
                 for i in range(lo, hi):
-                    acc += 0.5 * (col[i] + col[i + 1])
+                    dt = t[i + 1] - t[i]
+                    acc += dt * (0.5 * (col[i] + col[i + 1]) if trapezoid else col[i])
+                U[j, c] = acc / (t[hi] - t[lo])
             else:
                 for i in range(lo, hi):
                     acc += col[i]
-            U[j, c] = acc / max(hi - lo, 1)
+                U[j, c] = acc / max(hi - lo, 1)
     return U
 
 
