@@ -177,6 +177,7 @@ from sideslip.models.fused_process import (
     IVY,
     NX_CORE,
     NX_GNSS_CAL,
+    U_WZ,
     f_rows,
 )
 from sideslip.signals import gnss_course, hold, speed_raw, speed_source, vehicle_speed
@@ -746,7 +747,9 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     # propagation by the trapezoidal rule where GNSS Doppler measures the velocities it
     # integrates (FusedSettings.trapezoid_with_doppler)
     trapezoid = has_vel and nz.trapezoid_with_doppler
-    U = _node_inputs(t, idx, (wz, wx, wy, ax, ay, fy_lp, road_roll), q_gap, trapezoid, causal=not smooth)
+    inputs = (wz, wx, wy, ax, ay, fy_lp, road_roll)
+    U = _node_inputs(t, idx, inputs, q_gap, trapezoid, stride, causal=not smooth)
+    del inputs
     del road_roll, q_gap, filled
     vw_n = vw[idx] if stride == 1 else _window_mean(vw, idx)
     g_node = np.searchsorted(idx, g_rows, side="left").astype(np.int64)
@@ -1083,6 +1086,7 @@ def _node_inputs(
     inputs: tuple[FloatArray, ...],
     q_gap: list[FloatArray],
     trapezoid: bool,
+    stride: int,
     causal: bool,
 ) -> FloatArray:
     """The engine's node inputs ``U`` (2, N, m): ``U[0, j]`` drives the prediction from node j
@@ -1093,11 +1097,15 @@ def _node_inputs(
     IMU sample at its instant stands for the interval after it, so the kinematics run half a
     row late) or with ``trapezoid`` by the trapezoidal rule (no lag for samples taken at
     their instants), weighted by time (:func:`sideslip.methods.fused_engine.block_means`).
-    Updates at node j: the rectangle rule's mean for the smoother; for the causal filter
-    the node's own row, so that no update reads a row after its node (the block mean had it
-    read the step's later rows, a 40 ms look-ahead at 100 Hz; the mean of the rows up to the
-    node lags by as much, and on the comparison's drives did no better than the single
-    row)."""
+    Updates at node j: the rectangle rule's mean for the smoother.  The causal filter's
+    updates read no row after their node (the block mean had them read the step's later
+    rows, a 40 ms look-ahead at 100 Hz): the node's own row, but for the yaw rate the mean of
+    the ``stride`` rows ending there.  The rear slip (v_y - l_r r) / v_x the tyres' stiffness
+    is learned against takes one gyro sample's noise as its own at walking pace, and a
+    regressor's noise biases the slope it fits low (urban_course seed 0 without GNSS: rear
+    scale 0.75 with the node's row, 0.86 with the mean; beta 0.133 -> 0.085 deg); the mean
+    lags two rows (step_steer 0.142 -> 0.197), and over the comparison's 16 drives x 3
+    receivers the two are within 0.007 deg of each other on every mean."""
     n = t.size
     N = idx.size
     prop = eng.block_means(idx, (*inputs, *q_gap), t, len(inputs), trapezoid)
@@ -1111,6 +1119,10 @@ def _node_inputs(
     if causal:
         U[1] = prop
         U[1, :, : len(inputs)] = np.column_stack([col[idx] for col in inputs])
+        # the yaw rate as the mean of the step's rows that end at the node
+        wz_sum = np.concatenate(([0.0], np.cumsum(inputs[U_WZ])))
+        first = np.maximum(idx - stride + 1, 0)
+        U[1, :, U_WZ] = (wz_sum[idx + 1] - wz_sum[first]) / (idx + 1 - first)
     elif trapezoid:
         U[1] = eng.block_means(idx, (*inputs, *q_gap), t, len(inputs), False)
     else:
