@@ -28,9 +28,9 @@ class FusedSettings:
     # row late.  Measured 2026-12-07, 16 scenarios x 3 files, fused beta RMSE mean with
     # Doppler (right / soft / rough file): at 100 Hz 0.041 / 0.049 / 0.052 -> 0.042 / 0.055
     # / 0.059 (race_lap 0.048 -> 0.033, step_steer 0.019 -> 0.039), at 20 Hz 0.148 / 0.127
-    # / 0.123 -> 0.060 / 0.072 / 0.073 (race_lap 0.311 -> 0.037); fused_filter at 100 Hz
-    # 0.106 / 0.113 / 0.111 -> 0.110 / 0.126 / 0.123, at 20 Hz 0.152 / 0.149 / 0.121 ->
-    # 0.102 / 0.122 / 0.121.  Without Doppler the tyres carry the slip and learn the
+    # / 0.123 -> 0.060 / 0.072 / 0.073 (race_lap 0.311 -> 0.037); fused_filter (right file,
+    # benchmarks/results/log_rates.md) 0.109 -> 0.109 at 100 Hz, 0.116 -> 0.109 at 50 Hz,
+    # 0.152 -> 0.102 at 20 Hz.  Without Doppler the tyres carry the slip and learn the
     # stiffness in the transients, where the half-row lag measured better (at 20 Hz, no
     # GNSS: 0.099 -> 0.115 with the trapezoid; positions only 0.070 -> 0.079), so it is kept
     # there; the comma2k19 minute and the Revs lap (both 100 Hz) are unchanged within 0.003
