@@ -13,6 +13,7 @@ their ``beta_std``; ``fused`` applies the same choice inside).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import threading
 import weakref
@@ -57,6 +58,16 @@ class DopplerTiming:
     note: str
     fit: LatencyEstimate | None
 
+    @property
+    def early(self) -> bool:
+        """The decisive fit reads the Doppler early against the IMU by more than
+        :data:`MIN_Z` sigma: not applied (receivers are late, not early), but the inputs
+        disagree in time by about that much (an IMU stamped late); ``sigma_s`` holds it."""
+        fit = self.fit
+        if fit is None or self.latency_s != 0.0 or fit.sigma_s > DECISIVE_SIGMA_S:
+            return False
+        return fit.latency_s <= -MIN_Z * math.hypot(fit.sigma_s, FLOOR_S)
+
 
 def choose_doppler_latency(fit: LatencyEstimate | None, prior_sigma_s: float) -> DopplerTiming:
     """The latency to take the epochs with, from the tyre-free fit: where the fit decides it
@@ -87,9 +98,17 @@ def choose_doppler_latency(fit: LatencyEstimate | None, prior_sigma_s: float) ->
             rms = math.hypot(fit.posterior_mean(prior_sigma_s), fit.posterior_sigma(prior_sigma_s))
         return DopplerTiming(0.0, rms, "not applied: the drive does not decide it", fit)
     if not late:
-        return DopplerTiming(
+        timing = DopplerTiming(
             0.0, max(abs(fit.latency_s), sigma), "not applied: not late beyond the fit's errors", fit
         )
+        if timing.early:
+            note = (
+                f"not applied: the Doppler reads {-fit.latency_s:.3f} +- {fit.sigma_s:.3f} s early "
+                "against the gyro (receivers are late, not early: an IMU stamped late?); |r| times "
+                "that is in beta_std"
+            )
+            timing = dataclasses.replace(timing, note=note)
+        return timing
     tau = min(fit.latency_s, MAX_LATENCY_S)
     return DopplerTiming(tau, sigma, "each GNSS epoch taken this long before its stamp", fit)
 

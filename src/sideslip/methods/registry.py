@@ -226,10 +226,12 @@ def run_method(method: str | Method, drive: Drive, vehicle: Vehicle, settings: A
                        est.innovations)  # fmt: skip
     if timing is not None:
         series = dict(est.series)
-        if timing.latency_s > 0.0 and "beta_std" in series:
+        if (timing.latency_s > 0.0 or timing.early) and "beta_std" in series:
             # the epochs moved by a latency known to timing.sigma_s: a residual tau lags the
             # course by r tau, read as slip (cr_limit_ramp, 5 Hz Doppler 200 ms late, read
-            # 0.195 +- 0.030 s: doppler_slip 75 % inside 2 sigma without this term)
+            # 0.195 +- 0.030 s: doppler_slip 75 % inside 2 sigma without this term); or the
+            # Doppler reads early against the gyro by timing.sigma_s (an IMU stamped late),
+            # which is not moved but lags the heading against the course the same way
             rate = series["r"] if "r" in series else np.nan_to_num(drive["wz"])
             series["beta_std"] = np.hypot(series["beta_std"], np.abs(rate) * timing.sigma_s)
         est = Estimate(est.method, est.t, series, {
