@@ -13,7 +13,6 @@ their ``beta_std``; ``fused`` applies the same choice inside).
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import threading
 import weakref
@@ -107,7 +106,7 @@ def choose_doppler_latency(fit: LatencyEstimate | None, prior_sigma_s: float) ->
                 "against the gyro (receivers are late, not early: an IMU stamped late?); |r| times "
                 "that is in beta_std"
             )
-            timing = dataclasses.replace(timing, note=note)
+            timing = replace(timing, note=note)
         return timing
     tau = min(fit.latency_s, MAX_LATENCY_S)
     return DopplerTiming(tau, sigma, "each GNSS epoch taken this long before its stamp", fit)
