@@ -75,6 +75,21 @@ def test_steady_turn_step_follows_the_circle():
     assert process(x, u2, dt, 0.0, 60.0)[0][IPSI] == pytest.approx(0.2 * dt)
 
 
+def test_a_steady_turn_with_suspension_roll_keeps_v_y_on_a_level_road():
+    """Analytic case: the tyres' force per mass f = v r = 4 m/s^2 rolls the body by k_phi f
+    (k_phi = 0.012 rad per m/s^2, CommonRoad's BMW file), and the body-fixed accelerometer
+    reads f plus gravity through that roll, a_y = f (1 + g k_phi).  On a level road (c_y = 0)
+    one step keeps v_y: the model takes f = a_y / (1 + g k_phi) out of the reading.  The
+    first-order a_y (1 - g k_phi) left f (g k_phi)^2 = 0.055 m/s^2 of lateral acceleration,
+    5.5e-4 m/s of v_y per 10 ms step, which c_y took up as a 0.3 deg bank."""
+    k_phi, f, g = 0.012, 4.0, 9.80665
+    x = np.zeros(NX_CORE)
+    x[IVX] = 20.0
+    u = np.array([0.2, 0.0, 0.0, 0.0, f * (1.0 + g * k_phi), f])
+    xn, _ = process(x, u, 0.01, k_phi, 60.0)
+    assert xn[IVY] == pytest.approx(0.0, abs=1e-12)
+
+
 def test_road_bank_follows_the_roll_input_and_the_body_rate_turns_the_velocity():
     """The bank-rate input (the roll gyro less the suspension's roll rate) moves c_y by
     g cos(bank) rate dt; on a bank the body velocity turns with the gyro's own z rate (w_z,

@@ -144,7 +144,7 @@ def drive_friction(
     steer = sig.steer - subtracted_offset(drive_steer_offset(drive, vehicle, gyro_zero, sig))
     lf, lr = vehicle.lf, vehicle.lr
     wb = lf + lr
-    fy = sig.ay * (1.0 - G * roll_gain)
+    fy = sig.ay / (1.0 + G * roll_gain)  # the tyres' force per mass (models.fused_process)
     r_dot = np.gradient(sig.wz, sig.t)
     # without a yaw inertia in the file, I_z = m l_f l_r (dynamic index 1, as fused assumes)
     iz = vehicle.yaw_inertia if math.isfinite(vehicle.yaw_inertia) else vehicle.mass * lf * lr

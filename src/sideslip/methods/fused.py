@@ -179,6 +179,7 @@ from sideslip.models.fused_process import (
     NX_GNSS_CAL,
     U_WZ,
     f_rows,
+    suspension_factor,
 )
 from sideslip.signals import gnss_course, hold, speed_raw, speed_source, vehicle_speed
 from sideslip.typical import slip_gain_k, understeer_gradient
@@ -683,7 +684,7 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     # heading closure where the drive decides it (fused_accel_offset), else 0 and the prior
     offset_y = _accel_offset(drive, vehicle, nz, smooth, has_vel, smoother_lever)
     params_offset = offset_y.params()
-    fy_lp = lp(t, (ay - offset_y.value) * (1.0 - G * k_phi), tau_f)
+    fy_lp = lp(t, (ay - offset_y.value) * suspension_factor(k_phi), tau_f)
     r_dot = _backward_rate(t, wz)
     r_dot_lp = lp(t, r_dot, tau_f) if (nz.yaw_acceleration or tyres_only) else np.zeros(n)
     wb = geom[0] + geom[1]
@@ -925,7 +926,7 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
         wx_row = _imu(drive, "wx", smooth).values
         ax_row, ay_row = (_imu(drive, c, smooth).values for c in ("ax", "ay"))
         ax, ay = _accel_at_cg(drive, vehicle, wx_row, wy, wz, not smooth, ax_row, ay_row)
-        fy_lp = lp(t, (ay - offset_y.value) * (1.0 - G * k_phi), tau_f)  # as above
+        fy_lp = lp(t, (ay - offset_y.value) * suspension_factor(k_phi), tau_f)  # as above
         if smooth:
             del ax, ay
     if smooth:  # linear interpolation of the smoothed nodes

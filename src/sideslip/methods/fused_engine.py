@@ -74,6 +74,7 @@ from sideslip.models.fused_process import (
     U_QWZ,
     U_WX,
     process_into,
+    suspension_factor,
     yaw_rate,
 )  # fmt: skip
 from sideslip.vehicle import G
@@ -838,5 +839,5 @@ def propagate_rows(
         if i_psi >= 0:
             out[i_psi, i] += dt * r
         out[i_vx, i] = vx + dt * (ax[i] - cx + r * vy)
-        out[i_vy, i] = vy + dt * (ay[i] * (1.0 - G * k_phi) - cy - r * vx)
+        out[i_vy, i] = vy + dt * (ay[i] * suspension_factor(k_phi) - cy - r * vx)
     return out
