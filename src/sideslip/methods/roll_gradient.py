@@ -88,6 +88,20 @@ class RollGradient:
                                 f"({self.value:.4g} +- {self.sigma:.2g}): file value used")
         return self
 
+    def combined(self, file_value: float, file_rel_sigma: float) -> RollGradient:
+        """The drive's value and the file's (a prior of relative 1-sigma ``file_rel_sigma``)
+        weighted by their precision; the drive's alone where the file has none, the file's
+        where the drive does not inform it (not ``applied``)."""
+        if not self.applied or not (np.isfinite(file_value) and file_value > 0.0):
+            return self
+        var_file = (file_rel_sigma * file_value) ** 2
+        var = self.sigma**2
+        value = (file_value * var + self.value * var_file) / (var + var_file)
+        sigma = float(np.sqrt(var * var_file / (var + var_file)))
+        return RollGradient(float(value), sigma, self.rows, self.curves, True,
+                            f"drive {self.value:.4g} +- {self.sigma:.2g} with the file's "
+                            f"{file_value:.4g} +- {file_rel_sigma:.0%}: {value:.4g}")
+
     def params(self, file_value: float) -> dict[str, object]:
         return {
             "roll_gradient_rad_per_m_s2": self.value if self.applied else file_value,
