@@ -58,8 +58,8 @@ there ``beta_std`` grows by the square root of the inflation and ``health`` (0 g
 unusable) says so; ``params["health"]`` lists the spans.
 
 The suspension's roll gain (the accelerometer tilts with the body, so the tyres' force is
-a_y less g times the roll) comes from the file's mass, CG height and roll stiffness unless the
-roll gyro in the drive's lateral transients contradicts it
+a_y less g times the roll) comes from the roll gyro in the drive's lateral transients,
+weighted with the one the file's mass, CG height and roll stiffness give
 (:mod:`sideslip.methods.roll_gyro_gradient`; ``params["roll_gradient_source"]``).
 
 Noise the drive sets or the physics sizes (:mod:`sideslip.methods.fused_settings`): the axle
@@ -321,9 +321,10 @@ def _drive_roll_gain(
     relation.  Measured with a file whose mass, CG height and roll stiffness are 15 % / 30 % /
     -30 % off (roll gain x 2.1) and Doppler GNSS, CommonRoad limit slalom: fused 1.68 -> 0.27
     deg (75 % -> 100 % inside 2 sigma), fused_filter 3.18 -> 0.44 (83 % -> 99 %).  Taking the
-    drive's value only where it contradicted the file by 3 sigma kept the right file's 0.0168
-    there against the drive's 0.0162: beta RMSE 0.172 deg, 0.102 with the two weighted (the
-    other 15 scenarios do not inform it or agree with the file)."""
+    drive's value only where it contradicted the file by 3 sigma kept the right file's k_phi
+    0.0168 there against the drive's 0.0162: beta RMSE 0.172 deg; 0.134 with the two
+    weighted, 0.102 with the drive's alone (the limit slalom is that sensitive; the other 15
+    scenarios of the comparison do not inform it or agree with the file)."""
     if not np.isfinite(wx).any():
         return k_phi_file, {}
     # a file without the roll model (no roll stiffness, CG or roll-axis height) leaves the

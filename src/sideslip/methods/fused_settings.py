@@ -229,10 +229,11 @@ class FusedSettings:
     # benchmarks/results/fused_accuracy.md); the causal filter too (the roll gyro's bias,
     # the drive's mean roll rate, read from the whole drive as a calibration)
     roll_gyro_bank_with_doppler: bool = True
-    # the roll gain from the roll gyro in the drive's lateral transients where it contradicts
-    # the file's m h / (k - m g h) (sideslip.methods.roll_gyro_gradient; read from the whole
-    # drive, for the causal filter too, as a calibration of the car): a file whose mass, CG
-    # height and roll stiffness double the roll misreads the tyres' force by 15 % at the limit
+    # the roll gain from the roll gyro in the drive's lateral transients, weighted with the
+    # file's m h / (k - m g h) as a 30 % prior (sideslip.methods.roll_gyro_gradient; read from
+    # the whole drive, for the causal filter too, as a calibration of the car): a file whose
+    # mass, CG height and roll stiffness double the roll misreads the tyres' force by 15 % at
+    # the limit
     identify_roll_gradient: bool = True
     # the causal filter (fused_filter) reads the car's and the receiver's calibrations from
     # the whole drive, as the smoother does: the roll gain, the Doppler latency, the velocity
