@@ -76,7 +76,9 @@ stiffness the causal filter withholds in a
 transient is a consider parameter of the axle relation (Schmidt-Kalman: its variance and
 cross-covariances kept, its gain zero).  ``beta_std`` adds what
 the covariance's white updates cannot carry: the learned stiffness's remaining relative
-uncertainty times the rear slip, the tyres' relaxation lag, and, where nothing but the tyres
+uncertainty times the rear slip, the lag of the force the relations read (the tyres'
+relaxation, and the measured force's causal low-pass: in the causal filter's turn-ins the
+slip trails the truth by its 0.15 s), and, where nothing but the tyres
 pins the slip (no GNSS; and for the causal filter in every corner, where GNSS cannot tell
 slip from a gyro scale error before the turn is complete), the relation's relative error;
 with GNSS positions but no Doppler, the change of beta when the whole estimator runs again
@@ -954,9 +956,11 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
         rows = _propagate_causal(t, tn, j, node_keys, node_vals, aux, wz, wy, ax, ay, fy_lp, k_phi)
         del ax, ay
     del nodes, node_vals, aux  # the row outputs hold what the series need
+    # the causal low-pass delays the force the relations read by about its time constant
+    force_lag_s = 0.0 if tyres_only else tau_f
     est = _estimate(
         drive, vehicle, smooth, nz, rows, (j, w, aux_nodes), node_params, k_phi, fy_lp, wz, wy,
-        has_pos, has_vel, use_front, tyres_carry,
+        has_pos, has_vel, use_front, tyres_carry, force_lag_s,
     )  # fmt: skip
     params = dict(est.params)
     series = dict(est.series)
@@ -1305,6 +1309,7 @@ def _estimate(
     has_vel: bool,
     use_front: bool,
     tyres_carry: bool,
+    force_lag_s: float,
 ) -> Estimate:
     """Output series (from the per-row ``rows`` and, through ``aux = (j, w, node values of
     AUX_KEYS)``, the node-level terms of beta_std and the attitude) and params (the cues,
@@ -1326,7 +1331,7 @@ def _estimate(
     beta, beta_std, r, roll, bank, pitch = eng.row_outputs(
         t, vx, vy, rows[IBG], wz, wy, fy_lp, j, w, aux_nodes, k_phi, geom_v[1],
         tyres_carry or not smooth, nz.force_rel, nz.force_sigma / geom_v[3],
-        nz.relaxation_m, math.radians(30.0), math.radians(5.0),
+        nz.relaxation_m, math.radians(30.0), math.radians(5.0), force_lag_s,
     )  # fmt: skip
     series = {
         "beta": beta, "beta_std": beta_std, "health": rows["health"], "r": r, "vx": vx,

@@ -732,7 +732,7 @@ def interp_rows(j, w, V):
 @numba.njit(cache=True)
 def row_outputs(
     t, vx, vy, bias_g, wz, wy, fy_lp, j, w, aux, k_phi, l_r, use_tyre, tyre_rel, tyre_floor,
-    relaxation_m, std_moving_max, std_still,
+    relaxation_m, std_moving_max, std_still, force_lag_s=0.0,
 ):  # fmt: skip
     """Per-row outputs of the fused estimator in one pass (see ``sideslip.methods.fused``):
     ``(beta, beta_std, r, roll, bank, pitch)``, rad and rad/s.
@@ -746,11 +746,12 @@ def row_outputs(
     gradient of atan2 and the (v_x, v_y) covariance, times the consistency inflation, plus
     (``use_tyre``) the tyre relation's error on the rear slip angle
     ``(tyre_rel alpha_r)^2 + tyre_floor^2``, the learned rear stiffness's relative uncertainty
-    on it ``(sqrt(var_sr) / max(s_r, 0.2) alpha_r)^2`` and the tyre-relaxation lag: alpha_r
-    less alpha_r through a first-order lag of time constant ``relaxation_m / |v_x|`` (the slip
-    the force follows; ``tau |d alpha_r / dt|`` on a ramp, without differentiating the yaw
-    gyro's noise in alpha_r row by row).  Roll = bank (from c_y) + k_phi * f_y; r the Euler
-    yaw rate through roll and pitch."""
+    on it ``(sqrt(var_sr) / max(s_r, 0.2) alpha_r)^2`` and the lag of the force the relations
+    read: alpha_r less alpha_r through a first-order lag of time constant
+    ``relaxation_m / |v_x| + force_lag_s`` (the tyres' relaxation, the slip the force follows,
+    and the causal low-pass of the measured force, s; ``tau |d alpha_r / dt|`` on a ramp,
+    without differentiating the yaw gyro's noise in alpha_r row by row).  Roll = bank (from
+    c_y) + k_phi * f_y; r the Euler yaw rate through roll and pitch."""
     n = t.size
     N = aux.shape[1]
     beta = np.empty(n)
@@ -764,11 +765,12 @@ def row_outputs(
     relaxed = np.empty(n)
     for i in range(n):
         alpha[i] = -(vy[i] - l_r * (wz[i] - bias_g[i])) / max(abs(vx[i]), 1.0)
-        # the slip the tyres' force follows: first-order lag over relaxation_m of travel
-        if i == 0 or relaxation_m <= 0.0:
+        # the slip the force the relations read follows: the tyres' first-order lag over
+        # relaxation_m of travel, and the force's own low-pass
+        if i == 0 or (relaxation_m <= 0.0 and force_lag_s <= 0.0):
             relaxed[i] = alpha[i]
         else:
-            tau = relaxation_m / max(abs(vx[i]), 1.0)
+            tau = relaxation_m / max(abs(vx[i]), 1.0) + force_lag_s
             k = 1.0 - math.exp(-(t[i] - t[i - 1]) / tau)
             relaxed[i] = relaxed[i - 1] + k * (alpha[i] - relaxed[i - 1])
     for i in range(n):

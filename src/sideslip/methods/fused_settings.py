@@ -121,7 +121,12 @@ class FusedSettings:
     # slip: suburban_outages at 3-5 m/s median beta_std 0.47 deg against an RMSE of 0.024;
     # now 0.08.  Measured 2026-12-07 over the 16 scenarios x 3 receivers x 3 files: no
     # 2-sigma share of fused or fused_filter moved by more than 0.01; Revs lap 0.960 ->
-    # 0.957 (fused_filter 0.963 -> 0.950), comma2k19 minute 0.987 -> 0.966)
+    # 0.957 (fused_filter 0.963 -> 0.950), comma2k19 minute 0.987 -> 0.966).  The lag's time
+    # constant also holds the force low-pass's where that is causal (force_tau_s, and
+    # smoother_force_tau_s with GNSS): fused_filter on the race lap without GNSS, where beta
+    # changes faster than 2 deg/s, 0.86 -> 0.97 inside 2 sigma (lowest share over the 16
+    # scenarios x 3 receivers x 3 files 0.93 -> 0.98; Revs lap 0.956 -> 0.979; no estimate
+    # moved)
     relaxation_m: float = 1.0
     axle_error_tau_s: float = 0.05  # s: correlation time of the axle relations' model error
     gate_chi2: float = 16.0  # NIS beyond which a wheel/axle update is down-weighted (Huber-type)
