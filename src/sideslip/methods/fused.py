@@ -85,6 +85,15 @@ with GNSS positions but no Doppler, the change of beta when the whole estimator 
 with the fixes one latency sigma later (a latency turns the fixes' course by r tau in every
 turn, and how much of that reaches beta depends on how far the tyres carry the slip there).
 
+Slow loggers: a table that samples a vibrating car's accelerometer at 10-50 Hz folds the
+vibration into the band of the tyre forces.  The smoother's body-velocity random walk is then
+at least the accelerometer's own white noise (sigma_a sqrt(dt), from the drive's successive
+differences), and where the rear stiffness it learns falls below half the file's through a
+force noisier than the relation's floor (errors in variables flatten the learned slope: the
+tyre reads soft) it runs again with the file's stiffness, not learned, its prior sigma in
+``beta_std`` (``stiffness_bound_fallback``; Revs lap at 20 Hz 1.41 -> 0.47 deg,
+benchmarks/results/real_log_rates.md).
+
 With GNSS Doppler the smoother reads the body velocity's random walk (everything the planar
 kinematics miss: accelerometer noise and vibration, roll transients, pitch and heave) from the
 drive: the value, searched down from the prior ``accel_vrw_psd`` a factor of two at a time,
@@ -638,6 +647,7 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     # the smallest velocity random walk the drive can have: its accelerometer's white noise
     vrw_floor = accel_noise_sigma(ay) * math.sqrt(drive.dt_median) if n > 1 else 0.0
     force_var = force_noise_variance(t, ay, tau_f, nz, causal=not smooth)
+    force_noise = float(np.sqrt(np.median(force_var))) if n else 0.0  # m/s^2, per relation
     # a gap's fill of the lateral reading is one error over the whole gap, in every axle
     # relation inside it: its variance quoted per axle_error_tau_s like the relations' own
     fa = filled["ay"]
@@ -837,6 +847,14 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     fix_t = t[g_rows[np.isfinite(gn["gnss_e"])]] if has_pos else t[:0]
     fix_rate = 1.0 / float(np.median(np.diff(fix_t))) if fix_t.size > 1 else 1.0
     cfg = _config(nz, k_phi, calibrate, has_vel, fix_rate)
+    # the smoother's body velocity random walk is at least the accelerometer's own white noise
+    # (on a 100 Hz log well below the prior; a 20 Hz log of a vibrating car folds its
+    # vibration into the band: Revs lap sampled at 20 Hz, 0.84 m/s^2 per sample, 0.19
+    # m/s/sqrt(s), beta RMSE 0.99 -> 0.47 deg with the file's stiffness); with GNSS Doppler
+    # the drive's value is searched from there (_identify_noise).  Not the causal filter's:
+    # the same lap 0.77 -> 1.55 deg with it
+    if smooth:
+        cfg[eng.C_ACCEL_VRW] = max(nz.accel_vrw_psd, vrw_floor)
     # the axle noise identified from the innovations may fall below its prior only where GNSS
     # gives v_y independently of the tyres (FusedSettings.adapt_min): not where the tyres
     # carry the slip (no GNSS; positions alone, whose arcs agree with any slip the tyres say)
@@ -865,6 +883,30 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
         if lever_check.applied:
             lever[0] += lever_check.dl_x_m
     xs, var, var_last, cov_vxvy, nis, counts = eng.run_nodes(*before, g_age, *after)
+    stiffness_fallback = None
+    wanted = float(np.median(xs[:, ISR]))
+    noisy = force_noise > nz.force_sigma
+    if smooth and nz.stiffness_bound_fallback and wanted < SCALE_MIN and noisy:
+        # the rear relation asked for a stiffness below half the file's while the force it
+        # reads carries more of the accelerometer's noise than the relation's own floor:
+        # errors in variables (the slip the noise moves through the velocity's integration
+        # is regressed on the same noise in the force) flatten the learned slope, the tyre
+        # reads soft (the Revs lap logged at 20 Hz, every fifth row: 0.84 m/s^2 of aliased
+        # vibration per sample, scale asked 0.31 x, beta RMSE 1.41 deg, 0.47 with the file's;
+        # comma2k19 minute at 20 Hz 0.40 x, 0.116 -> 0.099 deg).  Run again with the file's
+        # stiffness, not learned; its prior sigma stays in beta_std
+        # (fused_stiffness.model_form_params).  A clean drive that asks for less than half
+        # keeps the bound (a file more than twice too stiff)
+        cfg_fixed = cfg.copy()
+        cfg_fixed[eng.C_STIFF_CURVE] = math.inf
+        after = (*after[:12], cfg_fixed, after[13])
+        xs, var, var_last, cov_vxvy, nis, counts = eng.run_nodes(*before, g_age, *after)
+        stiffness_fallback = (
+            f"not learned: the rear axle's relation asked for {wanted:.3g} x the file's stiffness, "
+            f"below {SCALE_MIN:g}, through a force {force_noise:.2f} m/s^2 noisy (above the "
+            f"relation's {nz.force_sigma:g}; FusedSettings.stiffness_bound_fallback): the file's "
+            "stiffness with the prior's sigma"
+        )
     prior_check = None  # (share of a moved prior the rear scale keeps, the prior's sigma)
     if tyres_carry and nz.stiffness_prior_check:
         # without Doppler the drive may not inform the rear stiffness at all: run once more
@@ -965,6 +1007,8 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     params = dict(est.params)
     series = dict(est.series)
     params.update(params_offset)
+    if stiffness_fallback is not None:
+        params["rear_stiffness_scale_note"] = stiffness_fallback
     if offset_y.informed:
         # c_y holds g sin(bank) plus the reading's offset: the road's bank is the rest
         sin_bank = np.clip(np.sin(series["bank"]) - offset_y.value / G, -0.6, 0.6)

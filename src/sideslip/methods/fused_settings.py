@@ -74,6 +74,9 @@ class FusedSettings:
     # the sigma the share it keeps implies where larger than the smoother's (fused_stiffness;
     # one more pass of the estimator on such drives)
     stiffness_prior_check: bool = True
+    # the smoother: where the rear scale it learned falls below SCALE_MIN through a force
+    # noisier than force_sigma, run again with the file's stiffness, not learned (fused.fuse)
+    stiffness_bound_fallback: bool = True
     mu_prior: float = 1.0  # dry asphalt
     mu_prior_sigma: float = 0.35
     # mu's prior mean from the drive's own understeer angle where the drive used at least 90 %

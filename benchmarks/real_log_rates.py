@@ -1,0 +1,94 @@
+"""The real drives logged at 100, 50, 20 and 10 Hz: what a slower logger does to the estimates.
+
+The shared real recordings (seed 002's Revs lap, no GNSS; the comma2k19 minute with 10 Hz
+GNSS), every row kept or every second / fifth / tenth row kept, as a logger that samples its
+inputs without averaging them would record them: the car's vibration above the new Nyquist
+rate folds into the band of the tyre forces (Revs: 0.85 m/s^2 per sample at 100 Hz).  The
+comma minute's GNSS epochs move to the nearest kept row (at most half a row).  Beta RMSE
+(deg, rows above 5 m/s) and the share of errors inside 2 beta_std for ``fused``,
+``fused_filter`` and the paper methods that run on the columns, and ``fused`` with
+``stiffness_bound_fallback`` off (where the learned rear stiffness falls below half the file's
+through a noisy force, the smoother takes the file's stiffness, ``fused.fuse``; both columns
+with the smoother's velocity random walk at least the accelerometer's white noise).  Skipped
+when ../shared/data is absent.  Writes ``benchmarks/results/real_log_rates.md``.
+Run: ``.venv/bin/python benchmarks/real_log_rates.py``.
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from compare_methods import REVS_LAP, two_sigma_share
+from results_file import write_result
+
+from sideslip.drive import Drive, drive_from_columns
+from sideslip.evaluate import metrics
+from sideslip.methods.registry import get_method, run_method, why_not
+from sideslip.vehicle import load_vehicle
+
+OUT = Path(__file__).parent / "results" / "real_log_rates.md"
+COMMA_SEGMENT = REVS_LAP.parent / "comma2k19_example1" / "b0c9d2329ad1606b_2018-08-02--08-34-47_40"
+DRIVES = {"revs_lap": ("revs", REVS_LAP, "revs_250lm"), "comma_minute": ("comma2k19", COMMA_SEGMENT, "rav4")}
+STRIDES = {100: 1, 50: 2, 20: 5, 10: 10}  # table rate (Hz) -> every n-th row kept
+METHODS = ("fused", "fused_filter", "fg_batch", "doppler_slip", "obs_bicycle", "kf_linear")
+NO_FALLBACK = {"stiffness_bound_fallback": False}
+
+
+def logged_at(drive: Drive, stride: int) -> Drive:
+    """Every ``stride``-th row of ``drive``; each GNSS epoch on the kept row nearest to it."""
+    if stride == 1:
+        return drive
+    keep = np.arange(0, len(drive), stride)
+    cols = {k: np.asarray(v)[keep].copy() for k, v in drive.data.items()}
+    gnss = [k for k in cols if k.startswith("gnss_")]
+    for k in gnss:
+        cols[k][:] = np.nan
+    if gnss:
+        epochs = np.flatnonzero(np.isfinite(np.asarray(drive[gnss[0]], dtype=float)))
+        rows = np.clip(np.round(epochs / stride).astype(int), 0, keep.size - 1)
+        for k in gnss:
+            cols[k][rows] = np.asarray(drive[k], dtype=float)[epochs]
+    return drive_from_columns({"t": drive.t[keep], **cols}, dict(drive.meta))
+
+
+def _cell(drive: Drive, vehicle: Any, method: str, settings: dict | None = None) -> str:
+    if why_not(get_method(method), drive, vehicle) is not None:
+        return "–"
+    est = run_method(method, drive, vehicle, settings)
+    rmse = metrics(drive, est.series)["beta_rmse_deg"]
+    if method.startswith("fused"):
+        return f"{rmse:.3f} ({two_sigma_share(drive, est):.2f})"
+    return f"{rmse:.3f}"
+
+
+def main() -> None:
+    from sideslip.io import convert
+
+    t0 = time.perf_counter()
+    header = ["drive", "table rate", "fused", "fused, no fallback", *METHODS[1:]]
+    body = ["| " + " | ".join(header) + " |", "|---|---|" + "---:|" * (len(header) - 2)]
+    for name, (kind, folder, preset) in DRIVES.items():
+        if not folder.is_dir():
+            body.append(f"| {name} | – | real data absent: {folder} |" + " |" * (len(header) - 3))
+            continue
+        whole = convert(kind, folder, None, None)
+        vehicle = load_vehicle(preset)
+        for rate, stride in STRIDES.items():
+            drive = logged_at(whole, stride)
+            cells = [_cell(drive, vehicle, "fused"), _cell(drive, vehicle, "fused", NO_FALLBACK)]
+            cells += [_cell(drive, vehicle, m) for m in METHODS[1:]]
+            body.append(f"| {name} | {rate} Hz | " + " | ".join(cells) + " |")
+            print(name, rate, flush=True)
+    intro = " ".join(__doc__.split("\n\n")[0].split()) + "  " + " ".join(
+        " ".join(__doc__.split("\n\n")[1].split()).split("Writes")[0].split()
+    )
+    body += ["", "Beta RMSE in degrees; for fused and fused_filter the 2-sigma share in brackets.", ""]
+    write_result(OUT, "The real drives logged at 100, 50, 20 and 10 Hz", "benchmarks/real_log_rates.py",
+                 time.perf_counter() - t0, intro, body)  # fmt: skip
+
+
+if __name__ == "__main__":
+    main()
