@@ -144,11 +144,12 @@ def test_revs_lap_without_gnss_beats_the_papers_factor_graph():
 def test_revs_lap_logged_at_20_hz_takes_the_files_stiffness_not_the_noises():
     """The same lap with every fifth row kept (a 20 Hz logger sampling, not averaging): the
     car's vibration, 0.84 m/s^2 per sample, folds into the band of the tyre forces.  Learned
-    through that noise the rear stiffness collapsed (0.31 x the file's asked, held at 0.5;
-    beta RMSE 1.41 deg, where fg_batch keeps 0.57): errors in variables.  Now the smoother
-    runs again with the file's stiffness where the scale falls below half through a noisy
-    force, and the velocity's random walk is at least the accelerometer's white noise.
-    Bounds: better than fg_batch on the same table (measured 0.47 deg against 0.57), >= 90 %
+    through that noise the rear stiffness collapsed (about 0.3 x the file's asked, held at
+    0.5; beta RMSE 1.38 deg, where fg_batch keeps 0.57): errors in variables.  Now the
+    smoother runs again with the file's stiffness where the scale falls below half through a
+    noisy force, its velocity random walk is at least the accelerometer's white noise, and
+    its zero-phase force low-pass takes half the single pass's time constant.
+    Bounds: better than fg_batch on the same table (measured 0.41 deg against 0.57), >= 90 %
     inside 2 sigma (measured 0.97), and the params say why."""
     if not REVS.exists():
         pytest.skip(f"real data absent: {REVS} (../shared/data is not shipped with the repo)")

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from sideslip.methods.fused import _low_pass
+from sideslip.methods.fused import _low_pass, _zero_phase_low_pass
 from sideslip.methods.fused_settings import FusedSettings, accel_noise_sigma, force_time_constant
 
 
@@ -24,6 +24,23 @@ def test_force_low_pass_is_as_short_as_the_accelerometer_noise_allows():
     tau = force_time_constant(t, noisy, 0.05, nz)
     assert tau == pytest.approx(0.01 * 9.0 / (2 * nz.force_noise_sigma**2), rel=0.05)
     assert np.std(_low_pass(t, noisy, tau)[100:]) == pytest.approx(nz.force_noise_sigma, rel=0.05)
+
+
+def test_a_zero_phase_low_pass_needs_half_the_time_constant():
+    """Run forwards and backwards (the smoother without GNSS) white noise passes the low-pass
+    twice and keeps sigma sqrt(dt / (4 tau)): the time constant that leaves force_noise_sigma
+    is half the single pass's (with the single pass's, the Revs lap sampled at 20 Hz had its
+    forces smoothed over 0.2 s each way; beta RMSE 0.467 -> 0.407 deg).  Checked by filtering
+    white noise (5 % tolerance: 40 000 samples, tau 25 rows; measured 0.301 against 0.3, and
+    0.214 with the single pass's tau)."""
+    rng = np.random.default_rng(4)
+    t = np.arange(40_000) * 0.01
+    nz = FusedSettings()
+    noisy = 3.0 * rng.standard_normal(t.size)
+    single = force_time_constant(t, noisy, 0.05, nz)
+    both = force_time_constant(t, noisy, 0.05, nz, zero_phase=True)
+    assert both == pytest.approx(single / 2.0)
+    assert np.std(_zero_phase_low_pass(t, noisy, both)[100:-100]) == pytest.approx(nz.force_noise_sigma, rel=0.05)
 
 
 def test_a_bad_setting_is_one_clear_error():

@@ -91,8 +91,9 @@ at least the accelerometer's own white noise (sigma_a sqrt(dt), from the drive's
 differences), and where the rear stiffness it learns falls below half the file's through a
 force noisier than the relation's floor (errors in variables flatten the learned slope: the
 tyre reads soft) it runs again with the file's stiffness, not learned, its prior sigma in
-``beta_std`` (``stiffness_bound_fallback``; Revs lap at 20 Hz 1.41 -> 0.47 deg,
-benchmarks/results/real_log_rates.md).
+``beta_std`` (``stiffness_bound_fallback``); without GNSS the force's zero-phase low-pass
+needs half the single pass's time constant for the same noise (Revs lap at 20 Hz 1.41 -> 0.41
+deg with the three, benchmarks/results/real_log_rates.md).
 
 With GNSS Doppler the smoother reads the body velocity's random walk (everything the planar
 kinematics miss: accelerometer noise and vibration, roll transients, pitch and heave) from the
@@ -640,10 +641,29 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     use_mu_fit = nz.identify_mu and (smooth or nz.identify_mu_causal)
     mu_fit = drive_friction(drive, vehicle, k_phi, nz.axle_curve_shape) if use_mu_fit else None
     axle = np.append(geom, nz.axle_curve_shape)  # the engine's axle vector (A_SHAPE last)
+    # where the tyres alone carry the slip (no GNSS) the smoother learns the stiffness from
+    # the transients, and there the axle forces must not lag the state: zero-phase low-pass
+    # (forward and backward: no lag, it has the later samples) and the moment balance with the
+    # yaw acceleration (without it the rear force leads the rear slip at turn-in).  Measured
+    # without GNSS: step_steer 0.100 -> 0.019 deg, race_lap 0.115 -> 0.086, Revs lap 0.30 ->
+    # 0.24; with GNSS (v_y measured) the same costs 4 % in the comparison's mean, so it is
+    # left off there.  GNSS positions without Doppler measure v_y only in transients: on an
+    # arc a constant error of the course draws the same track as a constant along-track offset
+    # of the fixes (their latency, an antenna lever arm the file does not state, the slow
+    # Gauss-Markov error), so there the tyres carry the slip as they do without GNSS
+    # (``positions_only_tyres``; below, in the stiffness's learning, the bank and beta_std)
+    tyres_carry = not has_vel and (not has_pos or nz.positions_only_tyres)
+    tyres_only = smooth and tyres_carry and nz.tyres_only_transients
     # axle forces per mass from the force and moment balance (seed 003 eqs 1-2)
     # the causal filter keeps its floor (a time constant from the whole drive's noise would
-    # read the future); the smoother's is raised where the drive's noise needs it
-    tau_f = force_time_constant(t, ay, nz.smoother_force_tau_s, nz) if smooth else nz.force_tau_s
+    # read the future); the smoother's is raised where the drive's noise needs it, half as
+    # much where its low-pass runs both ways (the noise passes it twice: Revs lap sampled at
+    # 50 / 20 / 10 Hz, beta RMSE 0.388 / 0.467 / 0.619 -> 0.278 / 0.407 / 0.522 deg)
+    tau_f = (
+        force_time_constant(t, ay, nz.smoother_force_tau_s, nz, zero_phase=tyres_only)
+        if smooth
+        else nz.force_tau_s
+    )
     # the smallest velocity random walk the drive can have: its accelerometer's white noise
     vrw_floor = accel_noise_sigma(ay) * math.sqrt(drive.dt_median) if n > 1 else 0.0
     force_var = force_noise_variance(t, ay, tau_f, nz, causal=not smooth)
@@ -661,19 +681,6 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
         slip_force = geom[A_CR] * geom[A_LR] / np.maximum(np.abs(v_held), nz.axle_min_speed) * fw.sigma
         force_var = force_var + slip_force**2 * np.maximum(fw.gap_s / nz.axle_error_tau_s, 1.0)
     del v_held
-    # where the tyres alone carry the slip (no GNSS) the smoother learns the stiffness from
-    # the transients, and there the axle forces must not lag the state: zero-phase low-pass
-    # (forward and backward: no lag, it has the later samples) and the moment balance with the
-    # yaw acceleration (without it the rear force leads the rear slip at turn-in).  Measured
-    # without GNSS: step_steer 0.100 -> 0.019 deg, race_lap 0.115 -> 0.086, Revs lap 0.30 ->
-    # 0.24; with GNSS (v_y measured) the same costs 4 % in the comparison's mean, so it is
-    # left off there.  GNSS positions without Doppler measure v_y only in transients: on an
-    # arc a constant error of the course draws the same track as a constant along-track offset
-    # of the fixes (their latency, an antenna lever arm the file does not state, the slow
-    # Gauss-Markov error), so there the tyres carry the slip as they do without GNSS
-    # (``positions_only_tyres``; below, in the stiffness's learning, the bank and beta_std)
-    tyres_carry = not has_vel and (not has_pos or nz.positions_only_tyres)
-    tyres_only = smooth and tyres_carry and nz.tyres_only_transients
     if has_pos and not has_vel:
         if tyres_carry:
             notes["gnss_positions_only"] = (
@@ -850,7 +857,8 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     # the smoother's body velocity random walk is at least the accelerometer's own white noise
     # (on a 100 Hz log well below the prior; a 20 Hz log of a vibrating car folds its
     # vibration into the band: Revs lap sampled at 20 Hz, 0.84 m/s^2 per sample, 0.19
-    # m/s/sqrt(s), beta RMSE 0.99 -> 0.47 deg with the file's stiffness); with GNSS Doppler
+    # m/s/sqrt(s); with the file's stiffness and the single pass's force time constant beta
+    # RMSE 0.99 -> 0.47 deg); with GNSS Doppler
     # the drive's value is searched from there (_identify_noise).  Not the causal filter's:
     # the same lap 0.77 -> 1.55 deg with it
     if smooth:
@@ -892,8 +900,8 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
         # errors in variables (the slip the noise moves through the velocity's integration
         # is regressed on the same noise in the force) flatten the learned slope, the tyre
         # reads soft (the Revs lap logged at 20 Hz, every fifth row: 0.84 m/s^2 of aliased
-        # vibration per sample, scale asked 0.31 x, beta RMSE 1.41 deg, 0.47 with the file's;
-        # comma2k19 minute at 20 Hz 0.40 x, 0.116 -> 0.099 deg).  Run again with the file's
+        # vibration per sample, scale asked about 0.3 x, beta RMSE 1.37 deg, 0.41 with the
+        # file's; comma2k19 minute at 20 Hz 0.40 x, 0.115 -> 0.099 deg).  Run again with the file's
         # stiffness, not learned; its prior sigma stays in beta_std
         # (fused_stiffness.model_form_params).  A clean drive that asks for less than half
         # keeps the bound (a file more than twice too stiff)

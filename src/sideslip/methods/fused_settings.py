@@ -413,15 +413,20 @@ def accel_noise_sigma(ay: FloatArray) -> float:
     return float(1.4826 * np.median(np.abs(d - np.median(d))) / math.sqrt(2.0))
 
 
-def force_time_constant(t: FloatArray, ay: FloatArray, floor_s: float, nz: FusedSettings) -> float:
+def force_time_constant(
+    t: FloatArray, ay: FloatArray, floor_s: float, nz: FusedSettings, zero_phase: bool = False
+) -> float:
     """Time constant (s) of the axle forces' low-pass: ``floor_s``, or longer where the drive's
     accelerometer noise sigma_a needs it: a first-order low-pass of white noise at step dt
-    leaves sigma_a sqrt(dt / (2 tau)), brought down to ``nz.force_noise_sigma``."""
+    leaves sigma_a sqrt(dt / (2 tau)), run forwards and backwards (``zero_phase``: the squared
+    gain twice, whose integral is half the single pass's) sigma_a sqrt(dt / (4 tau)), brought
+    down to ``nz.force_noise_sigma``."""
     if t.size < 3:
         return floor_s
     dt = float(np.median(np.diff(t)))
     sig = accel_noise_sigma(ay)
-    return max(floor_s, dt * sig**2 / (2.0 * nz.force_noise_sigma**2))
+    passes = 4.0 if zero_phase else 2.0
+    return max(floor_s, dt * sig**2 / (passes * nz.force_noise_sigma**2))
 
 
 def force_noise_variance(
