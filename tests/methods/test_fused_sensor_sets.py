@@ -166,12 +166,12 @@ def test_revs_lap_logged_at_20_hz_takes_the_files_stiffness_not_the_noises():
     assert est.params["rear_stiffness_scale_note"].startswith("not learned")
 
 
-def test_a_file_twice_too_stiff_on_a_clean_drive_keeps_the_bound():
+def test_a_file_far_too_stiff_on_a_clean_drive_keeps_the_bound():
     """The fallback above is for noise, not for a file that is far off: race_lap without GNSS
     with the file's cornering stiffness 2.5 x the car's asks for a scale below 0.5 through a
     clean force (the simulator's accelerometer, 0.05 m/s^2), so the scale is held at 0.5 as
-    before (measured beta RMSE 0.275 deg; the file's own stiffness there gives more).  Bound:
-    0.35 deg, the held scale, and its note."""
+    before (measured beta RMSE 0.275 deg; falling back to the file's stiffness there gives
+    0.854).  Bound: 0.35 deg, the held scale, and its note."""
     drive = _without_gnss(sim_drive("race_lap"))
     vehicle = load_vehicle(drive.meta["vehicle"])
     vehicle = vehicle.with_changes(cf=2.5 * vehicle.cf, cr=2.5 * vehicle.cr)
