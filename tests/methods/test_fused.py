@@ -71,9 +71,13 @@ def test_multipath_bursts_at_the_grip_limit_do_not_make_fused_confidently_wrong(
     the GNSS carrying multipath bursts (runs of wrong epochs that agree with each other).
     Measured, seed 1 (beta RMSE, share inside 2 sigma): slalom 0.45 deg / 0.89 without the
     inertial Doppler check, 0.14 / 0.97 with it; ramp 2.13 / 0.17 without, 0.14 / 0.97 with.
-    fused is the best method on both (next: doppler_slip_noroll 0.54 on the slalom, fused_filter
-    0.52 on the ramp).  Bounds: the measured value plus 75 %, the 2-sigma target of issue 15,
-    and the check must matter (off at least 1.5x worse)."""
+    With the smoother's second look at the Doppler (fused_bursts; session 27), both checks /
+    the forward one only / the second look only / neither: slalom 0.097 / 0.105 / 0.210 /
+    0.768, ramp 0.078 / 0.072 / 0.053 / 0.283, every share 1.00 but neither's 0.92 on the
+    slalom.  fused is the best method on both (next: doppler_slip_noroll 0.54 on the slalom,
+    fused_filter 0.52 on the ramp).  Bounds: the 0.14 measured before the second look plus
+    75 %, the 2-sigma target of issue 15, and the checks must matter (both off at least 1.5x
+    worse)."""
     pytest.importorskip("vehiclemodels", reason="needs the optional commonroad extra")
     drive = sim_drive(scenario, 1)
     vehicle = load_vehicle(drive.meta["vehicle"])
@@ -81,7 +85,7 @@ def test_multipath_bursts_at_the_grip_limit_do_not_make_fused_confidently_wrong(
     rmse = metrics(drive, est.series)["beta_rmse_deg"]
     assert rmse < bound_deg
     assert two_sigma_share(drive, est) >= 0.90
-    off = run_method("fused", drive, vehicle, settings={"doppler_check": False})
+    off = run_method("fused", drive, vehicle, settings={"doppler_check": False, "doppler_burst_check": False})
     assert metrics(drive, off.series)["beta_rmse_deg"] > 1.5 * rmse
     others = {k: v for k, v in beta_rmse_all(drive, vehicle).items() if k != "fused"}
     assert rmse < min(others.values()), others

@@ -681,6 +681,23 @@ def run_nodes(
 
 
 @numba.njit(cache=True)
+def doppler_residuals(xs, U, g_node, g_ve, g_vn, lever, cfg):
+    """Distance (m/s) of each Doppler epoch from the antenna velocity that the node states
+    ``xs`` (the smoothed ones) predict at its node; NaN where the epoch has no Doppler
+    (:mod:`sideslip.methods.fused_bursts`)."""
+    nx = xs.shape[1]
+    out = np.full(g_node.size, np.nan)
+    H2 = np.zeros((2, nx))
+    dr = np.zeros(nx)
+    for gi in range(g_node.size):
+        if math.isfinite(g_ve[gi]) and math.isfinite(g_vn[gi]):
+            k = g_node[gi]
+            he, hn = gnss_velocity(xs[k], U[1, k], cfg[C_K_PHI], lever, H2, dr)
+            out[gi] = math.hypot(g_ve[gi] - he, g_vn[gi] - hn)
+    return out
+
+
+@numba.njit(cache=True)
 def block_means(idx, cols, t, n_inputs, trapezoid):
     """Node inputs, shape (N, len(cols)): for node j the rows [idx[j], idx[j+1]) (the last
     node: its rows to the end).  Columns from ``n_inputs`` on take the plain mean of those

@@ -370,6 +370,14 @@ class FusedSettings:
     # 0.152, lowest share 0.64 -> 0.98 (fused_filter 0.510 -> 0.442, 0.31 -> 0.97); the
     # 16-scenario comparison (three files): no beta cell moved by more than 0.003 deg
     doppler_check_holds_tyres: bool = True
+    # the smoother looks at the Doppler once more against its smoothed track: epochs beyond
+    # doppler_burst_gate x the drive's own residual scale, in runs of doppler_burst_min_run
+    # or more, are a burst the forward check let in; they get their distance as sigma and
+    # the smoother runs again (sideslip.methods.fused_bursts; benchmarks/results/
+    # fused_accuracy.md, session 27)
+    doppler_burst_check: bool = True
+    doppler_burst_gate: float = 3.5  # per-axis scales: 2-D chi^2 at 99.8 %
+    doppler_burst_min_run: int = 2
 
     def __post_init__(self) -> None:
         for f in fields(self):
