@@ -909,6 +909,7 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
             vstd = gn["vstd"].copy()
             vstd[burst] = np.maximum(vstd[burst], residual[burst] / math.sqrt(2.0))
             after = (*after[:5], vstd, *after[6:])
+            del xs, var, var_last, cov_vxvy, nis, counts  # not held through the second pass
             xs, var, var_last, cov_vxvy, nis, counts = eng.run_nodes(*before, g_age, *after)
             notes["gnss_doppler_bursts"] = (
                 f"{int(burst.sum())} Doppler epochs in runs beyond {nz.doppler_burst_gate:g} x the "
