@@ -24,6 +24,7 @@ from sideslip.errors import InputError
 from sideslip.estimate import Estimate, check_estimate
 from sideslip.imu_lever import drive_at_cg
 from sideslip.settings import make_settings, settings_dict
+from sideslip.units_check import check_lateral_units
 from sideslip.vehicle import Vehicle
 
 MethodFunc = Callable[..., Estimate]  # (drive, vehicle) or (drive, vehicle, settings)
@@ -196,6 +197,7 @@ def run_method(method: str | Method, drive: Drive, vehicle: Vehicle, settings: A
             column=cols[0],
         )
     check_gyro_sign(drive)
+    check_lateral_units(drive)
     params = vehicle.missing(list(method.vehicle_params))
     if params:
         raise InputError(

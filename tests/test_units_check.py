@@ -1,0 +1,51 @@
+"""The lateral accelerometer against the yaw rate and speed (sideslip.units_check)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from sideslip.drive import Drive, drive_from_columns
+from sideslip.errors import InputError
+from sideslip.methods.registry import run_method
+from sideslip.units_check import check_lateral_units
+from sideslip.vehicle import load_vehicle
+from tests.conftest import sim_drive
+
+
+def _scaled(drive: Drive, factors: dict[str, float]) -> Drive:
+    cols = {k: np.asarray(v, dtype=float) * factors.get(k, 1.0) for k, v in drive.data.items()}
+    return drive_from_columns({"t": drive.t, **cols}, dict(drive.meta))
+
+
+def test_a_lateral_acceleration_in_g_is_named_with_its_slope():
+    """race_lap with ay and ax logged in g: in its turns ay follows v wz with slope 0.10
+    (0.99 in m/s^2), which no bank or roll explains; the error names the column, the first
+    turning row and the units that would give it.  Every method refuses it (fused read 21 deg
+    of beta RMSE from the Revs lap in g)."""
+    drive = _scaled(sim_drive("race_lap"), {"ay": 1 / 9.81, "ax": 1 / 9.81})
+    with pytest.raises(InputError) as err:
+        check_lateral_units(drive)
+    line = str(err.value)
+    assert "column 'ay'" in line and "row " in line
+    assert "ay follows 0.101 x speed x wz" in line and "ay in g reads 0.10" in line
+    with pytest.raises(InputError, match="column 'ay'"):
+        run_method("obs_bicycle", drive, load_vehicle(drive.meta["vehicle"]))
+
+
+def test_a_lateral_acceleration_in_feet_per_second_squared_is_caught_under_the_range_limit():
+    """urban_course with ay in ft/s^2 (at most 3.28 x 4 m/s^2, well under the 100 m/s^2
+    limit): slope 1.19 x 3.28 = 3.89 of ay on v wz (measured), beyond 1.8."""
+    drive = _scaled(sim_drive("urban_course"), {"ay": 3.2808})
+    with pytest.raises(InputError, match=r"column 'ay': row \d+: in turns .* ay follows 3\.89"):
+        check_lateral_units(drive)
+
+
+def test_valid_drives_pass_including_superelevated_curves_and_a_banked_bowl():
+    """Superelevation tied to curvature lowers the slope (urban_highway, to 5 deg: 0.63,
+    measured) and a 25 deg bowl reverses it (banked_turn seed 1: -0.51, correlation -0.77):
+    both valid, both pass.  A drive with under 10 s of turns beyond 2 m/s^2 is not judged."""
+    slope = check_lateral_units(sim_drive("urban_highway"))
+    assert slope is not None and 0.5 < slope < 0.75
+    assert check_lateral_units(sim_drive("banked_turn", 1)) == pytest.approx(-0.51, abs=0.05)
+    assert check_lateral_units(sim_drive("step_steer")) is None
