@@ -8,7 +8,7 @@ import pytest
 from sideslip.drive import Drive, drive_from_columns
 from sideslip.errors import InputError
 from sideslip.methods.registry import run_method
-from sideslip.units_check import check_lateral_units
+from sideslip.units_check import check_lateral_axes, check_lateral_units, lateral_axes
 from sideslip.vehicle import load_vehicle
 from tests.conftest import sim_drive
 
@@ -49,3 +49,40 @@ def test_valid_drives_pass_including_superelevated_curves_and_a_banked_bowl():
     assert slope is not None and 0.5 < slope < 0.75
     assert check_lateral_units(sim_drive("banked_turn", 1)) == pytest.approx(-0.51, abs=0.05)
     assert check_lateral_units(sim_drive("step_steer")) is None
+
+
+def _no_gnss(drive: Drive) -> Drive:
+    cols = {k: np.asarray(v, dtype=float) for k, v in drive.data.items() if not k.startswith("gnss_")}
+    return drive_from_columns({"t": drive.t, **cols}, dict(drive.meta))
+
+
+def test_a_yaw_gyro_upside_down_without_gnss_is_named_by_the_steering_and_ay():
+    """urban_course without GNSS (where the GNSS-course check cannot run), wz flipped: in its
+    gentle turns wz turns against the steering and against ay / speed (correlations -1.00 /
+    -1.00 measured, +1.00 / +1.00 unflipped); every method refuses the drive."""
+    valid = _no_gnss(sim_drive("urban_course"))
+    c_ay, c_steer, _ = lateral_axes(valid)
+    assert c_ay > 0.99 and c_steer > 0.99
+    check_lateral_axes(valid, uses_steer=True)  # no error
+    flipped = _scaled(valid, {"wz": -1.0})
+    with pytest.raises(InputError, match=r"column 'wz': row \d+: in gentle turns .* is the gyro axis flipped"):
+        run_method("fused", flipped, load_vehicle(valid.meta["vehicle"]))
+
+
+def test_a_steering_positive_right_stops_the_methods_that_read_it_only():
+    """urban_course without GNSS, steer flipped: the steering turns against wz while ay agrees
+    with wz.  obs_bicycle (which reads the steering) refuses the drive, naming steer; fused
+    (which does not, FusedSettings.front_axle off) runs."""
+    drive = _scaled(_no_gnss(sim_drive("urban_course")), {"steer": -1.0})
+    vehicle = load_vehicle(drive.meta["vehicle"])
+    with pytest.raises(InputError, match=r"column 'steer': .* is the steering positive right"):
+        run_method("obs_bicycle", drive, vehicle)
+    assert np.isfinite(run_method("fused", drive, vehicle)["beta"]).all()
+
+
+def test_a_banked_bowl_and_short_drives_are_not_judged_on_their_axes():
+    """banked_turn (25 deg): ay turns against the turn there (correlation -0.88) while the
+    steering and the gyro agree, so ay alone is never judged; its 5 s of gentle turns are
+    under the 10 s the check needs anyway."""
+    assert lateral_axes(sim_drive("banked_turn")) is None
+    check_lateral_axes(sim_drive("banked_turn"), uses_steer=True)
