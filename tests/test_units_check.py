@@ -8,7 +8,7 @@ import pytest
 from sideslip.drive import Drive, drive_from_columns
 from sideslip.errors import InputError
 from sideslip.methods.registry import run_method
-from sideslip.units_check import check_lateral_axes, check_lateral_units, lateral_axes
+from sideslip.units_check import check_lateral_axes, check_lateral_units, check_longitudinal, lateral_axes
 from sideslip.vehicle import load_vehicle
 from tests.conftest import sim_drive
 
@@ -86,3 +86,28 @@ def test_a_banked_bowl_and_short_drives_are_not_judged_on_their_axes():
     under the 10 s the check needs anyway."""
     assert lateral_axes(sim_drive("banked_turn")) is None
     check_lateral_axes(sim_drive("banked_turn"), uses_steer=True)
+
+
+def test_an_imu_mounted_backwards_is_named_by_the_speeds_rate():
+    """urban_course with ax and ay flipped (the IMU turned 180 deg about z): ax turns against
+    the speed's rate (correlation -1.00 measured; +1.00, slope 1.03 as simulated), so every
+    method refuses the drive, naming ax.  (fused read 36 deg of beta RMSE from the Revs lap so
+    mounted.)"""
+    valid = sim_drive("urban_course")
+    assert check_longitudinal(valid) == pytest.approx(1.03, abs=0.05)
+    drive = _scaled(valid, {"ax": -1.0, "ay": -1.0})
+    with pytest.raises(InputError, match=r"column 'ax': row \d+: .* is the IMU mounted backwards"):
+        run_method("fused", drive, load_vehicle(valid.meta["vehicle"]))
+
+
+def test_time_stamps_in_milliseconds_are_named_by_the_slope_of_ax():
+    """urban_course with t in ms: the speed's rate reads 1000x too small, so ax follows it
+    with a slope of hundreds (756 measured: on the millisecond clock the 0.5 s mean is one row,
+    so the wheel speeds' noise stays in the rate); ax in g reads 0.10."""
+    drive = sim_drive("urban_course")
+    cols = {k: np.asarray(v, dtype=float) for k, v in drive.data.items()}
+    in_ms = drive_from_columns({"t": drive.t * 1000.0, **cols}, dict(drive.meta))
+    with pytest.raises(InputError, match=r"column 'ax': .* ax follows [1-9]\d\d x the speed's rate"):
+        check_longitudinal(in_ms)
+    with pytest.raises(InputError, match=r"ax follows 0\.10\d x the speed's rate"):
+        check_longitudinal(_scaled(drive, {"ax": 1 / 9.81}))

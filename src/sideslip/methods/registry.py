@@ -24,7 +24,7 @@ from sideslip.errors import InputError
 from sideslip.estimate import Estimate, check_estimate
 from sideslip.imu_lever import drive_at_cg
 from sideslip.settings import make_settings, settings_dict
-from sideslip.units_check import check_lateral_axes, check_lateral_units
+from sideslip.units_check import check_lateral_axes, check_lateral_units, check_longitudinal
 from sideslip.vehicle import Vehicle
 
 MethodFunc = Callable[..., Estimate]  # (drive, vehicle) or (drive, vehicle, settings)
@@ -198,6 +198,7 @@ def run_method(method: str | Method, drive: Drive, vehicle: Vehicle, settings: A
         )
     check_gyro_sign(drive)
     check_lateral_units(drive)
+    check_longitudinal(drive)
     check_lateral_axes(drive, "steer" in columns_used(method, drive))
     params = vehicle.missing(list(method.vehicle_params))
     if params:
