@@ -11,6 +11,7 @@ from typer.testing import CliRunner
 from sideslip.cli import app
 from sideslip.conventions import heading_north_cw_deg
 from sideslip.frames import geodetic_to_enu
+from tests.conftest import sim_drive
 from tests.helpers import CIRCLE
 
 ORIGIN = [48.78, 9.18, 250.0]
@@ -155,3 +156,22 @@ def test_long_drives_are_read_compact_by_default(tmp_path, monkeypatch):
     monkeypatch.setattr(cli_estimate, "LONG_DRIVE_ROWS", 5000)
     res = invoke("estimate", CIRCLE, "--vehicle", "midsize_sedan", "--method", "kkf", "--out", out)
     assert res.exit_code == 0 and "compact" not in res.output
+
+
+def test_a_lateral_acceleration_in_g_is_one_line_and_writes_nothing(tmp_path):
+    """race_lap with ay logged in g (within the 100 m/s^2 range limit): in its turns ay
+    follows speed x wz with slope 0.10 where m/s^2 read 0.99 (sideslip.units_check); exit 2,
+    one line naming the file, the column and the row, nothing written."""
+    drive = sim_drive("race_lap")
+    frame = pd.DataFrame({"t": drive.t, **{k: np.asarray(v) for k, v in drive.data.items()}})
+    frame["ay"] = frame["ay"] / 9.81
+    path = tmp_path / "in_g.parquet"
+    frame.to_parquet(path)
+    out = tmp_path / "e.parquet"
+    res = invoke("estimate", path, "--vehicle", drive.meta["vehicle"], "--out", out)
+    assert res.exit_code == 2
+    line = res.stderr.strip()
+    assert "\n" not in line
+    assert line.startswith(f"error: {path}: column 'ay': row ")
+    assert "ay follows 0.101 x speed x wz" in line
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["in_g.parquet"]

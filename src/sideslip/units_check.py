@@ -38,6 +38,18 @@ MIN_CORRELATION = 0.8
 SLOPE_RANGE = (0.2, 1.8)  # SI 0.62-1.19 measured; ay in g 0.10, wz in deg/s 0.017, ft/s^2 3.3
 
 
+MIN_SPREAD = 1.0  # m/s^2: 5-95 % spread one side of a slope needs
+
+
+def _narrow(x: np.ndarray) -> bool:
+    """Whether ``x`` spans less than :data:`MIN_SPREAD` between its 5th and 95th percentiles.
+    Where both sides of a slope are that narrow (one steady circle, or a synthetic drive's
+    constant turn) only noise or rounding would decide it; where one side spans (a wrong unit
+    shrinks the other) it is judged."""
+    lo, hi = np.percentile(x, [5.0, 95.0])
+    return bool(hi - lo < MIN_SPREAD)
+
+
 def lateral_slope(drive: Drive) -> tuple[float, float, int] | None:
     """``(slope, correlation, first row)`` of ``a_y`` on ``v w_z`` over the drive's turning
     rows (faster than :data:`MIN_SPEED`, ``|v w_z|`` beyond :data:`MIN_CENTRIPETAL`), or
@@ -50,7 +62,8 @@ def lateral_slope(drive: Drive) -> tuple[float, float, int] | None:
     x = v * wz
     with np.errstate(invalid="ignore"):
         rows = np.isfinite(ay) & np.isfinite(x) & (v > MIN_SPEED) & (np.abs(x) > MIN_CENTRIPETAL)
-    if rows.sum() < 50 or rows.sum() * drive.dt_median < MIN_TURNING_S:
+    narrow = _narrow(x[rows]) and _narrow(ay[rows]) if rows.any() else True
+    if rows.sum() < 50 or rows.sum() * drive.dt_median < MIN_TURNING_S or narrow:
         return None
     xa, ya = x[rows] - x[rows].mean(), ay[rows] - ay[rows].mean()
     sxx, syy = float(np.sum(xa * xa)), float(np.sum(ya * ya))
@@ -101,7 +114,7 @@ def lateral_axes(drive: Drive) -> tuple[float, float, int] | None:
             np.isfinite(ay) & np.isfinite(x) & np.isfinite(steer) & (v > MIN_SPEED)
             & (np.abs(x) > LINEAR_BAND[0]) & (np.abs(x) < LINEAR_BAND[1])
         )  # fmt: skip
-    if rows.sum() < 50 or rows.sum() * drive.dt_median < MIN_LINEAR_S:
+    if rows.sum() < 50 or rows.sum() * drive.dt_median < MIN_LINEAR_S or _narrow(x[rows]):
         return None
     c_ay = np.corrcoef(ay[rows], x[rows])[0, 1]
     c_steer = np.corrcoef(steer[rows], wz[rows])[0, 1]
@@ -178,7 +191,8 @@ def longitudinal_slope(drive: Drive) -> tuple[float, float, int] | None:
     v_m = uniform_filter1d(vehicle_speed(drive), n, mode="nearest")
     dv = np.gradient(v_m, drive.t)
     rows = finite & (v_m > MIN_SPEED) & ((np.abs(dv) > MIN_LON_ACCEL) | (np.abs(ax_m) > MIN_LON_ACCEL))
-    if rows.sum() < 50 or rows.sum() * drive.dt_median < MIN_LON_S:
+    narrow = _narrow(dv[rows]) and _narrow(ax_m[rows]) if rows.any() else True
+    if rows.sum() < 50 or rows.sum() * drive.dt_median < MIN_LON_S or narrow:
         return None
     xa, ya = dv[rows] - dv[rows].mean(), ax_m[rows] - ax_m[rows].mean()
     sxx, syy = float(np.sum(xa * xa)), float(np.sum(ya * ya))
