@@ -50,6 +50,21 @@ def _narrow(x: np.ndarray) -> bool:
     return bool(hi - lo < MIN_SPREAD)
 
 
+def _slope(
+    x: np.ndarray, y: np.ndarray, rows: np.ndarray, min_rows: float
+) -> tuple[float, float, int] | None:
+    """``(slope, correlation, first row)`` of ``y`` on ``x`` (with an intercept) over
+    ``rows``, or None with fewer than ``max(50, min_rows)`` rows or both sides narrow."""
+    if rows.sum() < max(50.0, min_rows) or (_narrow(x[rows]) and _narrow(y[rows])):
+        return None
+    xa, ya = x[rows] - x[rows].mean(), y[rows] - y[rows].mean()
+    sxx, syy = float(np.sum(xa * xa)), float(np.sum(ya * ya))
+    if sxx <= 0.0 or syy <= 0.0:
+        return None
+    sxy = float(np.sum(xa * ya))
+    return sxy / sxx, sxy / float(np.sqrt(sxx * syy)), int(np.flatnonzero(rows)[0])
+
+
 def lateral_slope(drive: Drive) -> tuple[float, float, int] | None:
     """``(slope, correlation, first row)`` of ``a_y`` on ``v w_z`` over the drive's turning
     rows (faster than :data:`MIN_SPEED`, ``|v w_z|`` beyond :data:`MIN_CENTRIPETAL`), or
@@ -62,32 +77,34 @@ def lateral_slope(drive: Drive) -> tuple[float, float, int] | None:
     x = v * wz
     with np.errstate(invalid="ignore"):
         rows = np.isfinite(ay) & np.isfinite(x) & (v > MIN_SPEED) & (np.abs(x) > MIN_CENTRIPETAL)
-    narrow = _narrow(x[rows]) and _narrow(ay[rows]) if rows.any() else True
-    if rows.sum() < 50 or rows.sum() * drive.dt_median < MIN_TURNING_S or narrow:
-        return None
-    xa, ya = x[rows] - x[rows].mean(), ay[rows] - ay[rows].mean()
-    sxx, syy = float(np.sum(xa * xa)), float(np.sum(ya * ya))
-    if sxx <= 0.0 or syy <= 0.0:
-        return None
-    sxy = float(np.sum(xa * ya))
-    return sxy / sxx, sxy / np.sqrt(sxx * syy), int(np.flatnonzero(rows)[0])
+    return _slope(x, ay, rows, MIN_TURNING_S * (1.0 / drive.dt_median))
 
 
 def check_lateral_units(drive: Drive) -> float | None:
     """Raise :class:`InputError` naming column ``ay`` when the lateral specific force and the
     yaw rate times speed are tightly related with a slope outside :data:`SLOPE_RANGE` (see
     the module docstring); returns the slope, or None where the drive cannot tell."""
-    found = lateral_slope(drive)
+    return _in_range(
+        drive, lateral_slope(drive), SLOPE_RANGE, "ay", "in turns (the first from this row) ay follows",
+        "speed x wz", "ay in m/s^2, wz in rad/s and the speed in m/s (ay in g reads 0.10, wz in "
+        "deg/s 0.017, ay in ft/s^2 3.3)",
+    )  # fmt: skip
+
+
+def _in_range(
+    drive: Drive, found: tuple[float, float, int] | None, bounds: tuple[float, float], column: str,
+    lead: str, regressor: str, units: str,
+) -> float | None:  # fmt: skip
+    """The slope of ``found``; :class:`InputError` naming ``column`` where it is tight
+    (correlation at least :data:`MIN_CORRELATION`) and outside ``bounds``."""
     if found is None:
         return None
     slope, corr, first = found
-    if corr >= MIN_CORRELATION and not SLOPE_RANGE[0] <= slope <= SLOPE_RANGE[1]:
+    if corr >= MIN_CORRELATION and not bounds[0] <= slope <= bounds[1]:
         raise InputError(
             drive.path,
-            f"in turns (the first from this row) ay follows {slope:.3g} x speed x wz (correlation "
-            f"{corr:.2f}): expected about 1 with ay in m/s^2, wz in rad/s and the speed in m/s "
-            "(ay in g reads 0.10, wz in deg/s 0.017, ay in ft/s^2 3.3)",
-            column="ay",
+            f"{lead} {slope:.3g} x {regressor} (correlation {corr:.2f}): expected about 1 with {units}",
+            column=column,
             row=first + 1,
         )
     return slope
@@ -191,15 +208,7 @@ def longitudinal_slope(drive: Drive) -> tuple[float, float, int] | None:
     v_m = uniform_filter1d(vehicle_speed(drive), n, mode="nearest")
     dv = np.gradient(v_m, drive.t)
     rows = finite & (v_m > MIN_SPEED) & ((np.abs(dv) > MIN_LON_ACCEL) | (np.abs(ax_m) > MIN_LON_ACCEL))
-    narrow = _narrow(dv[rows]) and _narrow(ax_m[rows]) if rows.any() else True
-    if rows.sum() < 50 or rows.sum() * drive.dt_median < MIN_LON_S or narrow:
-        return None
-    xa, ya = dv[rows] - dv[rows].mean(), ax_m[rows] - ax_m[rows].mean()
-    sxx, syy = float(np.sum(xa * xa)), float(np.sum(ya * ya))
-    if sxx <= 0.0 or syy <= 0.0:
-        return None
-    sxy = float(np.sum(xa * ya))
-    return sxy / sxx, sxy / np.sqrt(sxx * syy), int(np.flatnonzero(rows)[0])
+    return _slope(dv, ax_m, rows, MIN_LON_S * (1.0 / drive.dt_median))
 
 
 def check_longitudinal(drive: Drive) -> float | None:
@@ -214,7 +223,7 @@ def check_longitudinal(drive: Drive) -> float | None:
     found = longitudinal_slope(drive)
     if found is None:
         return None
-    slope, corr, first = found
+    _, corr, first = found
     if corr <= -MIN_CORRELATION:
         raise InputError(
             drive.path,
@@ -224,13 +233,8 @@ def check_longitudinal(drive: Drive) -> float | None:
             column="ax",
             row=first + 1,
         )
-    if corr >= MIN_CORRELATION and not LON_SLOPE_RANGE[0] <= slope <= LON_SLOPE_RANGE[1]:
-        raise InputError(
-            drive.path,
-            f"speeding up and braking (the first from this row), ax follows {slope:.3g} x the "
-            f"speed's rate (correlation {corr:.2f}): expected about 1 with ax in m/s^2, the speed "
-            "in m/s and t in s (ax in g reads 0.10, t in ms 1000, a speed in km/h 0.28)",
-            column="ax",
-            row=first + 1,
-        )
-    return slope
+    return _in_range(
+        drive, found, LON_SLOPE_RANGE, "ax", "speeding up and braking (the first from this row), ax "
+        "follows", "the speed's rate", "ax in m/s^2, the speed in m/s and t in s (ax in g reads "
+        "0.10, t in ms 1000, a speed in km/h 0.28)",
+    )  # fmt: skip
