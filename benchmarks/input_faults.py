@@ -8,7 +8,8 @@ GNSS epoch 200 ms late (``gnss_latency_s``, as from a logger that stamps message
 arrival); the IMU's samples 50 ms late against the rest of the table.  Right vehicle file;
 beta RMSE in degrees on rows faster than 5 m/s, the share of beta errors inside 2 beta_std
 in brackets.  The inputs' gaps are handled by ``sideslip.methods.input_gaps``, the late
-Doppler by ``sideslip.doppler_timing``.  Writes ``benchmarks/results/input_faults.md``.
+Doppler by ``sideslip.doppler_timing``, the late IMU by ``sideslip.imu_timing`` (where the
+Doppler's turns decide its lag).  Writes ``benchmarks/results/input_faults.md``.
 Run: ``.venv/bin/python benchmarks/input_faults.py [--scenario S ...]``.
 """
 
@@ -31,7 +32,7 @@ from sideslip.simulate.run import _lookup  # the scenario's own sensor overrides
 from sideslip.vehicle import load_vehicle
 
 OUT = Path(__file__).parent / "results" / "input_faults.md"
-SCENARIOS = ("race_lap", "cr_limit_ramp", "urban_course")
+SCENARIOS = ("race_lap", "cr_limit_ramp", "cr_limit_slalom", "urban_course")
 METHODS = ("fused", "fused_filter", "doppler_slip", "kkf", "fg_batch")
 IMU = ("ax", "ay", "az", "wx", "wy", "wz")
 

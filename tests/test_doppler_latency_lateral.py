@@ -84,6 +84,18 @@ def test_bank_changes_are_told_from_lag_by_the_roll_gyro() -> None:
     assert blind is None or blind[1] > 0.05
 
 
+def test_a_few_rows_missing_from_the_roll_gyro_keep_its_term() -> None:
+    """dlc_bank 0.1 s late with the roll gyro's first five rows empty (an IMU whose first
+    samples the logger missed, or one moved back by sideslip.imu_timing): the gyro is
+    integrated across them.  Before, any gap took the roll term away and the fit gave nothing."""
+    drive = late_drive("dlc_bank", 0.1)
+    wx = drive["wx"].copy()
+    wx[:5] = np.nan
+    found = lateral_doppler_latency(Drive(drive.t, {**drive.data, "wx": wx}, drive.meta, drive.path))
+    assert found is not None and found[1] < 0.035
+    assert abs(found[0] - 0.1) < 2.5 * found[1]
+
+
 def test_a_sensor_gap_leaves_its_epochs_out() -> None:
     """Ten seconds of accelerometer gap (NaN) in the slalom: the epochs that would read it are
     left out, the rest still decide, and nothing non-finite comes out."""

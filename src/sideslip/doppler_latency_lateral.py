@@ -78,6 +78,7 @@ GAIN_RANGE = (0.5, 1.5)  # k_a outside: the fit does not describe a lag (bank, b
 ROLL_FIT_GAIN = 0.9  # the roll fit is taken where its residual scale is below this share
 ROLL_SEGMENT_S = 120.0  # the integrated roll gyro's offset and drift: one pair per segment
 HUBER_K = 1.5  # Huber threshold, in robust sigmas of the residual
+MIN_ROLL_GYRO_SHARE = 0.95  # of the rows: a roll gyro with more gaps is not integrated
 
 
 Lookup = Callable[[FloatArray, FloatArray], FloatArray]
@@ -244,8 +245,11 @@ def lateral_doppler_latency(
         return _span_mean(at, moved, lo - shift, hi - shift)
 
     roll = None
-    if "wx" in drive and np.isfinite(drive["wx"]).all():
-        wx = np.asarray(drive["wx"], dtype=float)
+    wx_ok = np.isfinite(drive["wx"]) if "wx" in drive else np.zeros(t.size, dtype=bool)
+    if wx_ok.mean() >= MIN_ROLL_GYRO_SHARE:
+        # the roll gyro's gaps (an IMU's first rows, dropouts) interpolated: a gap of a few
+        # rows took the roll term away (dlc_bank with the IMU 20 ms late: no fit at all)
+        wx = np.interp(t, t[wx_ok], np.asarray(drive["wx"], dtype=float)[wx_ok])
         roll = G * _running_integral(t, wx - float(np.median(wx)))
     per_sample = max(2.0 * RATE_HALF_S / spacing, 1.0)
     one_segment = np.zeros(k.size, dtype=np.intp)

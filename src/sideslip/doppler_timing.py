@@ -26,8 +26,8 @@ from sideslip.gnss_latency import LatencyEstimate, identify_doppler_latency
 from sideslip.vehicle import Vehicle
 
 __all__ = [
-    "DopplerTiming", "antenna_geometry", "choose_doppler_latency", "drive_on_receiver_time",
-    "forget_timings", "shift_gnss",
+    "DopplerTiming", "antenna_geometry", "choose_doppler_latency", "doppler_fit",
+    "drive_on_receiver_time", "forget_timings", "shift_gnss",
 ]  # fmt: skip
 
 # a Doppler latency is applied only when this decisive ...  (was 0.015 s, set when the speed
@@ -61,7 +61,9 @@ class DopplerTiming:
     def early(self) -> bool:
         """The decisive fit reads the Doppler early against the IMU by more than
         :data:`MIN_Z` sigma: not applied (receivers are late, not early), but the inputs
-        disagree in time by about that much (an IMU stamped late); ``sigma_s`` holds it."""
+        disagree in time by about that much; ``sigma_s`` holds it.  (An IMU stamped late
+        while the wheels are on time is moved back before the receiver is timed,
+        :mod:`sideslip.imu_timing`; this remains where the wheels read late with it.)"""
         fit = self.fit
         if fit is None or self.latency_s != 0.0 or fit.sigma_s > DECISIVE_SIGMA_S:
             return False
@@ -103,8 +105,8 @@ def choose_doppler_latency(fit: LatencyEstimate | None, prior_sigma_s: float) ->
         if timing.early:
             note = (
                 f"not applied: the Doppler reads {-fit.latency_s:.3f} +- {fit.sigma_s:.3f} s early "
-                "against the gyro (receivers are late, not early: an IMU stamped late?); |r| times "
-                "that is in beta_std"
+                "against the gyro (receivers are late, not early: the IMU and the wheels stamped "
+                "late?); |r| times that is in beta_std"
             )
             timing = replace(timing, note=note)
         return timing
@@ -159,7 +161,14 @@ def antenna_geometry(vehicle: Vehicle) -> tuple[float, float, float]:
 def timing_of(drive: Drive, vehicle: Vehicle, prior_sigma_s: float) -> DopplerTiming:
     """:func:`choose_doppler_latency` for ``drive`` (fitted once per drive and vehicle
     geometry while the drive lives)."""
-    geometry = antenna_geometry(vehicle)
+    return choose_doppler_latency(doppler_fit(drive, antenna_geometry(vehicle)), prior_sigma_s)
+
+
+def doppler_fit(drive: Drive, geometry: tuple[float, float, float]) -> LatencyEstimate | None:
+    """:func:`sideslip.gnss_latency.identify_doppler_latency` for ``drive`` with the antenna
+    ``geometry`` (:func:`antenna_geometry`), fitted once per drive and geometry while the
+    drive lives: the IMU's timing, the receiver's and ``fused`` share it (a third of a second
+    per hour of drive)."""
     with _TIMED_LOCK:
         hit = _TIMED.get(id(drive))
     if hit is not None and hit[0]() is drive and hit[1] == geometry:
@@ -170,7 +179,7 @@ def timing_of(drive: Drive, vehicle: Vehicle, prior_sigma_s: float) -> DopplerTi
             while len(_TIMED) >= _TIMED_MAX:
                 _TIMED.pop(next(iter(_TIMED)))
             _TIMED[id(drive)] = (weakref.ref(drive), geometry, fit)
-    return choose_doppler_latency(fit, prior_sigma_s)
+    return fit
 
 
 def drive_on_receiver_time(drive: Drive, vehicle: Vehicle) -> tuple[Drive, DopplerTiming | None]:

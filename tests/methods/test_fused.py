@@ -437,7 +437,7 @@ def test_doppler_latency_is_applied_only_where_the_drive_decides_it(monkeypatch,
     from sideslip.gnss_latency import LatencyEstimate
     from sideslip.methods import fused
 
-    monkeypatch.setattr(fused, "identify_doppler_latency", lambda drive, *geometry: LatencyEstimate(*found, 1.0, 500))
+    monkeypatch.setattr(fused, "doppler_fit", lambda drive, geometry: LatencyEstimate(*found, 1.0, 500))
     params: dict[str, object] = {}
     tau, sig = fused._doppler_latency(sim_drive("demo"), FusedSettings(), params)
     assert tau == pytest.approx(used)

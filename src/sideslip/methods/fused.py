@@ -154,11 +154,11 @@ from numpy.typing import NDArray
 
 from sideslip import gnss
 from sideslip.calibrate.friction import drive_friction
-from sideslip.doppler_timing import antenna_geometry, choose_doppler_latency
+from sideslip.doppler_timing import antenna_geometry, choose_doppler_latency, doppler_fit
 from sideslip.drive import LONG_DRIVE_ROWS, Drive
 from sideslip.estimate import Estimate
 from sideslip.filters.consistency import nis_consistency
-from sideslip.gnss_latency import identify_doppler_latency, identify_latency
+from sideslip.gnss_latency import identify_latency
 from sideslip.imu_lever import specific_force_at_cg
 from sideslip.methods import fused_engine as eng
 from sideslip.methods.fused_accel_offset import AccelOffset, lateral_accel_offset
@@ -445,7 +445,8 @@ def _gnss(drive: Drive, nz: FusedSettings, doppler_latency_s: float = 0.0) -> di
 
 
 def _doppler_latency(
-    drive: Drive, nz: FusedSettings, params: dict[str, Any], geometry: tuple[float, ...] = (0.0, 0.0, 0.0)
+    drive: Drive, nz: FusedSettings, params: dict[str, Any],
+    geometry: tuple[float, float, float] = (0.0, 0.0, 0.0),
 ) -> tuple[float, float]:
     """The GNSS Doppler's latency (s) the epochs are taken with, and the 1-sigma of what may
     remain: the tyre-free fits of :func:`sideslip.gnss_latency.identify_doppler_latency` (speed
@@ -461,7 +462,7 @@ def _doppler_latency(
     urban_course 0.037 -> 0.336 (fused_accuracy.md)."""
     if not nz.identify_doppler_latency or "gnss_ve" not in drive:
         return 0.0, 0.0
-    est = identify_doppler_latency(drive, *geometry)
+    est = doppler_fit(drive, geometry)
     timing = choose_doppler_latency(est, nz.doppler_latency_prior_sigma_s)
     params["gnss_doppler_latency_note"] = timing.note
     if est is None:
@@ -1433,6 +1434,7 @@ def _estimate(
 # A z gyro, a lateral accelerometer and a speed suffice; GNSS, steering, ax, wx, wy are used
 # when present (params["cues"]).
 COLUMNS = ("wz", "ay", SPEED)
+OPTIONAL = ("gnss_e", "gnss_n", "gnss_ve", "gnss_vn", "steer", "ax", "wx", "wy")
 PAPER = "this toolkit (fuses seeds 000, 001, 003, 004 ideas; brush tyre model Pacejka 2012)"
 
 
@@ -1444,6 +1446,7 @@ PAPER = "this toolkit (fuses seeds 000, 001, 003, 004 ideas; brush tyre model Pa
     paper=PAPER,
     settings=FusedSettings,
     accelerometer="own",
+    optional=OPTIONAL,
 )
 def fused(drive: Drive, vehicle: Vehicle, settings: FusedSettings) -> Estimate:
     """Off-line best estimate: forward EKF and RTS smoother (see module docstring)."""
@@ -1458,6 +1461,7 @@ def fused(drive: Drive, vehicle: Vehicle, settings: FusedSettings) -> Estimate:
     paper=PAPER,
     settings=FusedSettings,
     accelerometer="own",
+    optional=OPTIONAL,
 )
 def fused_filter(drive: Drive, vehicle: Vehicle, settings: FusedSettings) -> Estimate:
     """Causal form of :func:`fused`: the forward EKF only."""

@@ -23,6 +23,7 @@ from sideslip.drive import SPEED_COLUMNS, Drive
 from sideslip.errors import InputError
 from sideslip.estimate import Estimate, check_estimate
 from sideslip.imu_lever import drive_at_cg
+from sideslip.imu_timing import drive_on_gnss_clock
 from sideslip.settings import make_settings, settings_dict
 from sideslip.units_check import check_lateral_axes, check_lateral_units, check_longitudinal
 from sideslip.vehicle import Vehicle
@@ -42,6 +43,7 @@ class Method:
     :func:`run_method` moves them there from the vehicle file's ``imu_xyz``,
     :mod:`sideslip.imu_lever`), ``"cg_causal"`` (the same for a causal method: without reading
     later gyro samples) or ``"own"`` (the method reads ``imu_xyz`` itself).
+    ``optional``: columns the method reads where the drive has them (``fused``'s GNSS).
     """
 
     name: str
@@ -52,6 +54,7 @@ class Method:
     paper: str
     settings: type | None = None
     accelerometer: str = "cg"
+    optional: tuple[str, ...] = ()
 
     def default_settings(self) -> Any:
         """The settings the method runs with when the user gives none (None: no tuning)."""
@@ -73,11 +76,12 @@ def register(
     vehicle_params: Sequence[str] = (),
     settings: type | None = None,
     accelerometer: str = "cg",
+    optional: Sequence[str] = (),
 ) -> Callable[[MethodFunc], MethodFunc]:
     """Decorator: register ``func`` under ``name`` (a lower-case identifier).
 
     ``settings``: a frozen dataclass of the method's tuning; ``func`` is then called as
-    ``func(drive, vehicle, settings)``.  ``accelerometer``: see :class:`Method`.
+    ``func(drive, vehicle, settings)``.  ``accelerometer``, ``optional``: see :class:`Method`.
     """
     if not name.isidentifier() or name != name.lower():
         raise ValueError(f"method name {name!r} must be a lower-case identifier")
@@ -88,7 +92,8 @@ def register(
         if name in _REGISTRY and _REGISTRY[name].func is not func:
             raise ValueError(f"method {name!r} registered twice")
         _REGISTRY[name] = Method(
-            name, func, tuple(columns), tuple(vehicle_params), summary, paper, settings, accelerometer
+            name, func, tuple(columns), tuple(vehicle_params), summary, paper, settings, accelerometer,
+            tuple(optional),
         )
         return func
 
@@ -208,13 +213,18 @@ def run_method(method: str | Method, drive: Drive, vehicle: Vehicle, settings: A
             "but the vehicle file does not give it",
         )
     moved_note = None
-    run_drive = drive
+    # an IMU stamped late against the Doppler and the wheels is moved back by the lag the
+    # drive decides (sideslip.imu_timing; race_lap with the IMU 50 ms late: fused 0.132 ->
+    # 0.026 deg, kkf 0.748 -> 0.180)
+    run_drive, imu_timing = drive, None
+    if reads_gnss(method):  # the others' inputs keep their clocks (the fit costs 0.34 s/h)
+        run_drive, imu_timing = drive_on_gnss_clock(drive, vehicle)
     timing = None
     if uses_gnss(method) and "gnss_ve" in drive:
         # a GNSS Doppler stamped late reads r x latency as sideslip in every turn: the
         # epochs are taken at their stamps less the latency the drive decides
         # (sideslip.doppler_timing; fused times the receiver itself)
-        run_drive, timing = drive_on_receiver_time(drive, vehicle)
+        run_drive, timing = drive_on_receiver_time(run_drive, vehicle)
     if method.accelerometer != "own":
         # an IMU the vehicle file puts away from the CG reads omega' x l + omega x (omega x l)
         # more than the CG's specific force (an IMU 1.2 m ahead: obs_modified on urban_course
@@ -234,14 +244,23 @@ def run_method(method: str | Method, drive: Drive, vehicle: Vehicle, settings: A
             # the epochs moved by a latency known to timing.sigma_s: a residual tau lags the
             # course by r tau, read as slip (cr_limit_ramp, 5 Hz Doppler 200 ms late, read
             # 0.195 +- 0.030 s: doppler_slip 75 % inside 2 sigma without this term); or the
-            # Doppler reads early against the gyro by timing.sigma_s (an IMU stamped late),
-            # which is not moved but lags the heading against the course the same way
+            # Doppler reads early by timing.sigma_s against the IMU and the wheels both (a
+            # whole bus stamped late, which sideslip.imu_timing leaves alone), not moved but
+            # lagging the heading against the course the same way
             rate = series["r"] if "r" in series else np.nan_to_num(drive["wz"])
             series["beta_std"] = np.hypot(series["beta_std"], np.abs(rate) * timing.sigma_s)
         est = Estimate(est.method, est.t, series, {
             **est.params, "gnss_doppler_latency_applied_s": timing.latency_s,
             "gnss_doppler_latency_applied_note": timing.note,
         }, est.innovations)  # fmt: skip
+    if imu_timing is not None:
+        series = dict(est.series)
+        imu_params = {**est.params, "imu_lag_applied_s": imu_timing.lag_s, "imu_lag_note": imu_timing.note}
+        if imu_timing.lag_s > 0.0 and "beta_std" in series:
+            # what remains of the lag lags the inputs against the course by r sigma
+            rate = series["r"] if "r" in series else np.nan_to_num(drive["wz"])
+            series["beta_std"] = np.hypot(series["beta_std"], np.abs(rate) * imu_timing.sigma_s)
+        est = Estimate(est.method, est.t, series, imu_params, est.innovations)
     if est.method != method.name or (settings is not None and "settings" not in est.params):
         est_params = dict(est.params)
         if settings is not None:
@@ -259,6 +278,11 @@ def uses_gnss(method: Method) -> bool:
     the receiver's time, :func:`sideslip.doppler_timing.drive_on_receiver_time`)."""
     names = [c for need in method.columns for c in ((need,) if isinstance(need, str) else need)]
     return any(c.startswith("gnss_") for c in names)
+
+
+def reads_gnss(method: Method) -> bool:
+    """Whether ``method`` reads a GNSS column, as a need or where present (``optional``)."""
+    return uses_gnss(method) or any(c.startswith("gnss_") for c in method.optional)
 
 
 def columns_used(method: Method, drive: Drive) -> list[str]:
