@@ -10,7 +10,8 @@ comma minute's GNSS epochs move to the nearest kept row (at most half a row).  B
 ``stiffness_bound_fallback`` off (where the learned rear stiffness falls below half the file's
 through a noisy force, the smoother takes the file's stiffness, ``fused.fuse``; both columns
 with the smoother's velocity random walk at least the accelerometer's white noise).  Skipped
-when ../shared/data is absent.  Writes ``benchmarks/results/real_log_rates.md``.
+when ../shared/data is absent.  Then the 100 Hz tables with the IMU alone at 50 / 20 / 10 Hz
+(NaN between its samples).  Writes ``benchmarks/results/real_log_rates.md``.
 Run: ``.venv/bin/python benchmarks/real_log_rates.py``.
 """
 
@@ -104,6 +105,52 @@ def _phases() -> list[str]:
     return [*out, ""]
 
 
+IMU = ("ax", "ay", "az", "wx", "wy", "wz")
+
+
+def imu_every(drive: Drive, stride: int) -> Drive:
+    """``drive`` with its IMU's samples on every ``stride``-th row only (NaN between them): an
+    IMU slower than the table the other sensors set, as the contract allows."""
+    data = dict(drive.data)
+    between = np.ones(len(drive), dtype=bool)
+    between[::stride] = False
+    for name in IMU:
+        if name in data:
+            col = np.asarray(data[name], dtype=float).copy()
+            col[between] = np.nan
+            data[name] = col
+    return Drive(drive.t, data, drive.meta, drive.path)
+
+
+def _slow_imu(header: list[str]) -> list[str]:
+    """Both drives at 100 Hz with the IMU at 50 / 20 / 10 Hz inside the table."""
+    from sideslip.io import convert
+
+    out = [
+        "## An IMU slower than the table",
+        "",
+        "The 100 Hz tables with the IMU's samples on every second / fifth / tenth row only (NaN "
+        "between them; the speed, steering and GNSS as recorded): what a 50 / 20 / 10 Hz IMU "
+        "beside a 100 Hz CAN bus gives.  The same IMU samples as the 50 / 20 / 10 Hz tables "
+        "above.",
+        "",
+        "| " + " | ".join(["drive", "IMU rate", *header[2:]]) + " |",
+        "|---|---|" + "---:|" * (len(header) - 2),
+    ]
+    for name, (kind, folder, preset) in DRIVES.items():
+        if not folder.is_dir():
+            continue
+        whole = convert(kind, folder, None, None)
+        vehicle = load_vehicle(preset)
+        for rate, stride in list(STRIDES.items())[1:]:
+            drive = imu_every(whole, stride)
+            cells = [_cell(drive, vehicle, "fused"), _cell(drive, vehicle, "fused", NO_FALLBACK)]
+            cells += [_cell(drive, vehicle, m) for m in METHODS[1:]]
+            out.append(f"| {name} | {rate} Hz | " + " | ".join(cells) + " |")
+            print(name, "imu", rate, flush=True)
+    return [*out, ""]
+
+
 def main() -> None:
     from sideslip.io import convert
 
@@ -124,6 +171,7 @@ def main() -> None:
             print(name, rate, flush=True)
     body += ["", "Beta RMSE in degrees; for fused and fused_filter the 2-sigma share in brackets.", ""]
     body += _phases()
+    body += _slow_imu(header)
     intro = " ".join(__doc__.split("\n\n")[0].split()) + "  " + " ".join(
         " ".join(__doc__.split("\n\n")[1].split()).split("Writes")[0].split()
     )

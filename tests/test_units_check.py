@@ -125,3 +125,22 @@ def test_time_stamps_in_milliseconds_are_named_by_the_slope_of_ax():
         check_longitudinal(in_ms)
     with pytest.raises(InputError, match=r"ax follows 0\.10\d x the speed's rate"):
         check_longitudinal(_scaled(drive, {"ax": 1 / 9.81}))
+
+
+def test_an_imu_slower_than_the_table_is_judged_on_its_own_samples():
+    """urban_course with the IMU on every second / fifth row only (NaN between its samples,
+    as the contract allows for a slower sensor): the 0.5 s mean of ax is the mean of its
+    samples.  Before, the empty rows counted as zeros and ax read 0.52 / 0.21 x the speed's
+    rate, and every method refused the drive (the Revs lap: "ax follows 0.211")."""
+    drive = sim_drive("urban_course")
+    for keep in (2, 5):
+        data = dict(drive.data)
+        between = np.ones(len(drive), dtype=bool)
+        between[::keep] = False
+        for name in ("ax", "ay", "az", "wx", "wy", "wz"):
+            col = drive[name].copy()
+            col[between] = np.nan
+            data[name] = col
+        slow = Drive(drive.t, data, drive.meta, drive.path)
+        assert check_longitudinal(slow) == pytest.approx(1.03, abs=0.05)
+        assert check_lateral_units(slow) == pytest.approx(check_lateral_units(drive), abs=0.02)

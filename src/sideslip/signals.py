@@ -54,6 +54,18 @@ def hold(values: FloatArray, t: FloatArray, fill: float = 0.0) -> tuple[FloatArr
     return held.astype(float), age.astype(float)
 
 
+def sample_step(t: FloatArray, x: FloatArray) -> float:
+    """Median spacing (s) of the samples of column ``x`` on the time base ``t``: the table's
+    step for a sensor on every row, longer for one slower than the table (NaN between its
+    samples: a 20 Hz IMU in a 100 Hz table, 0.05 s).  Its white noise's density is sigma^2
+    times this, not times the table's step.  The table's step where ``x`` has under two
+    samples."""
+    rows = np.flatnonzero(np.isfinite(x))
+    if rows.size < 2:
+        return float(np.median(np.diff(t))) if t.size > 1 else 0.0
+    return float(np.median(np.diff(t[rows])))
+
+
 def interpolate(values: FloatArray, t: FloatArray, max_gap_s: float = np.inf) -> FloatArray:
     """Linear interpolation between real samples (offline use), NaN across gaps > max_gap_s.
 

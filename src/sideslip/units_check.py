@@ -29,7 +29,7 @@ import numpy as np
 
 from sideslip.drive import Drive
 from sideslip.errors import InputError
-from sideslip.signals import speed_raw, vehicle_speed
+from sideslip.signals import sample_step, speed_raw, vehicle_speed
 
 MIN_SPEED = 5.0  # m/s: slower, the slip angles' share of the lateral motion grows
 MIN_CENTRIPETAL = 2.0  # m/s^2: |v w_z| of the rows taken as turning (a road bank is less)
@@ -77,7 +77,8 @@ def lateral_slope(drive: Drive) -> tuple[float, float, int] | None:
     x = v * wz
     with np.errstate(invalid="ignore"):
         rows = np.isfinite(ay) & np.isfinite(x) & (v > MIN_SPEED) & (np.abs(x) > MIN_CENTRIPETAL)
-    return _slope(x, ay, rows, MIN_TURNING_S * (1.0 / drive.dt_median))
+    # seconds of turning at the IMU's own sample spacing (an IMU slower than the table)
+    return _slope(x, ay, rows, MIN_TURNING_S / sample_step(drive.t, ay))
 
 
 def check_lateral_units(drive: Drive) -> float | None:
@@ -131,7 +132,7 @@ def lateral_axes(drive: Drive) -> tuple[float, float, int] | None:
             np.isfinite(ay) & np.isfinite(x) & np.isfinite(steer) & (v > MIN_SPEED)
             & (np.abs(x) > LINEAR_BAND[0]) & (np.abs(x) < LINEAR_BAND[1])
         )  # fmt: skip
-    if rows.sum() < 50 or rows.sum() * drive.dt_median < MIN_LINEAR_S or _narrow(x[rows]):
+    if rows.sum() < 50 or rows.sum() * sample_step(drive.t, ay) < MIN_LINEAR_S or _narrow(x[rows]):
         return None
     c_ay = np.corrcoef(ay[rows], x[rows])[0, 1]
     c_steer = np.corrcoef(steer[rows], wz[rows])[0, 1]
@@ -204,10 +205,19 @@ def longitudinal_slope(drive: Drive) -> tuple[float, float, int] | None:
     ax = np.asarray(drive["ax"], dtype=float)
     finite = np.isfinite(ax)
     n = max(1, round(LON_SMOOTH_S / drive.dt_median))
-    ax_m = uniform_filter1d(np.where(finite, ax, 0.0), n, mode="nearest")
+    # the mean of the samples in each window (an IMU slower than the table has NaN between
+    # its samples: zeros there read a 50 Hz IMU in a 100 Hz table as ax at half scale)
+    count = uniform_filter1d(finite.astype(float), n, mode="nearest")
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ax_m = uniform_filter1d(np.where(finite, ax, 0.0), n, mode="nearest") / count
+    ax_m[count < 0.5 / n] = np.nan
     v_m = uniform_filter1d(vehicle_speed(drive), n, mode="nearest")
     dv = np.gradient(v_m, drive.t)
-    rows = finite & (v_m > MIN_SPEED) & ((np.abs(dv) > MIN_LON_ACCEL) | (np.abs(ax_m) > MIN_LON_ACCEL))
+    with np.errstate(invalid="ignore"):
+        rows = (
+            np.isfinite(ax_m) & (v_m > MIN_SPEED)
+            & ((np.abs(dv) > MIN_LON_ACCEL) | (np.abs(ax_m) > MIN_LON_ACCEL))
+        )  # fmt: skip
     return _slope(dv, ax_m, rows, MIN_LON_S * (1.0 / drive.dt_median))
 
 

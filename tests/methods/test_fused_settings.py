@@ -80,3 +80,23 @@ def test_force_noise_variance_is_the_drives_own_accelerometer_noise():
     assert causal[-1] == pytest.approx(0.85**2 * 0.1, rel=0.05)
     early = force_noise_variance(t[:1000], ay[:1000], 0.05, nz, causal=True)
     np.testing.assert_allclose(causal[:1000], early, rtol=1e-12)
+
+
+def test_a_slower_accelerometer_is_read_at_its_own_sample_spacing():
+    """The same 20 Hz samples of 0.85 m/s^2 vibration, as a 20 Hz table and as every fifth row
+    of a 100 Hz table (NaN between): the same noise density sigma^2 x 0.05 s, so the same low
+    pass and the same force noise (offline and causal).  Read at the table's 0.01 s step the
+    variance was a fifth of it."""
+    from sideslip.methods.fused_settings import force_noise_variance, sample_step
+
+    rng = np.random.default_rng(3)
+    t = np.arange(20_000) * 0.01
+    ay = np.full(t.size, np.nan)
+    ay[::5] = 0.85 * rng.standard_normal(t[::5].size)
+    nz = FusedSettings()
+    assert sample_step(t, ay) == pytest.approx(0.05) and sample_step(t[::5], ay[::5]) == pytest.approx(0.05)
+    assert force_time_constant(t, ay, 0.05, nz) == pytest.approx(force_time_constant(t[::5], ay[::5], 0.05, nz))
+    for causal in (False, True):
+        in_100 = force_noise_variance(t, ay, 0.05, nz, causal=causal)
+        in_20 = force_noise_variance(t[::5], ay[::5], 0.05, nz, causal=causal)
+        assert in_100[-1] == pytest.approx(in_20[-1], rel=1e-9)

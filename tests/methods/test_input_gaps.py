@@ -43,6 +43,23 @@ def test_a_gap_is_interpolated_off_line_and_held_on_line() -> None:
     np.testing.assert_allclose(inter.gap_s[gap], 1.0, atol=0.011)
 
 
+def test_a_sensor_slower_than_the_table_has_no_gap_between_its_samples() -> None:
+    """The sine sampled on every fifth row of a 100 Hz table (a 20 Hz sensor): interpolated
+    between its samples with no fill error, as a 20 Hz table would give it; a sample missing
+    from it (two 20 Hz steps between samples) is a gap, with the signal's change as error."""
+    t = np.arange(0.0, 60.0, 0.01)
+    v = np.sin(OMEGA * t)
+    slow = np.full(t.size, np.nan)
+    slow[::5] = v[::5]
+    filled = fill_input(t, slow, interpolate=True)
+    np.testing.assert_allclose(filled.values, np.interp(t, t[::5], v[::5]), atol=1e-12)
+    assert not filled.sigma.any() and not filled.gap_s.any()
+    slow[3000] = np.nan  # one 20 Hz sample missing: rows 2996-3004 lie in a 0.1 s gap
+    holed = fill_input(t, slow, interpolate=True)
+    assert (holed.sigma[2996:3005] > 0.0).all() and not holed.sigma[:2996].any() and not holed.sigma[3005:].any()
+    np.testing.assert_allclose(holed.gap_s[3001], 0.1, atol=1e-9)
+
+
 def test_the_fill_error_is_the_signals_own_change_over_the_span() -> None:
     """A unit sine changes over tau by sqrt(1 - cos(omega tau)) rms (its mean over the phase:
     E[(sin(a + b) - sin a)^2] = 1 - cos b); the held fill's sigma at the span since the last

@@ -10,6 +10,8 @@ from dataclasses import dataclass, fields
 import numpy as np
 from numpy.typing import NDArray
 
+from sideslip.signals import sample_step
+
 FloatArray = NDArray[np.float64]
 
 __all__ = ["FusedSettings", "accel_noise_sigma", "force_noise_variance", "force_time_constant"]
@@ -428,10 +430,11 @@ def force_time_constant(
     accelerometer noise sigma_a needs it: a first-order low-pass of white noise at step dt
     leaves sigma_a sqrt(dt / (2 tau)), run forwards and backwards (``zero_phase``: the squared
     gain twice, whose integral is half the single pass's) sigma_a sqrt(dt / (4 tau)), brought
-    down to ``nz.force_noise_sigma``."""
+    down to ``nz.force_noise_sigma``.  ``ay``: the samples (NaN between them), dt their own
+    spacing (:func:`sample_step`)."""
     if t.size < 3:
         return floor_s
-    dt = float(np.median(np.diff(t)))
+    dt = sample_step(t, ay)
     sig = accel_noise_sigma(ay)
     passes = 4.0 if zero_phase else 2.0
     return max(floor_s, dt * sig**2 / (passes * nz.force_noise_sigma**2))
@@ -446,15 +449,22 @@ def force_noise_variance(
     times tau / axle_error_tau_s.  sigma_a from successive differences: over the whole drive
     (robust, :func:`accel_noise_sigma`) off-line; for the causal filter the running mean of
     the squared differences up to each row (a simulated MEMS unit adds almost nothing; a
-    real car's vibration, 0.85 m/s^2 per sample on the Revs lap, doubles the 0.15 floor)."""
+    real car's vibration, 0.85 m/s^2 per sample on the Revs lap, doubles the 0.15 floor).
+    ``ay``: the samples (NaN between them), dt their own spacing (:func:`sample_step`); the
+    causal mean is over the differences of successive samples at most 1.5 spacings apart."""
     n = t.size
     if n < 3:
         return np.zeros(n)
-    dt = float(np.median(np.diff(t)))
+    dt = sample_step(t, ay)
     scale = dt / (2.0 * tau_s) * max(tau_s / nz.axle_error_tau_s, 1.0)
     if not causal:
         return np.full(n, accel_noise_sigma(ay) ** 2 * scale)
-    d2 = np.concatenate(([0.0], np.diff(ay) ** 2))
-    d2 = np.where(np.isfinite(d2), d2, 0.0)
-    running = np.cumsum(d2) / np.maximum(np.arange(n), 1)
+    rows = np.flatnonzero(np.isfinite(ay))
+    d2 = np.zeros(n)
+    counted = np.zeros(n)
+    if rows.size > 1:
+        close = np.diff(t[rows]) <= 1.5 * dt
+        d2[rows[1:]] = np.where(close, np.diff(ay[rows]) ** 2, 0.0)
+        counted[rows[1:]] = close
+    running = np.cumsum(d2) / np.maximum(np.cumsum(counted), 1.0)
     return np.asarray(0.5 * running * scale, dtype=float)

@@ -41,6 +41,8 @@ _MAX_POINTS = 20000  # sample times the statistic is taken over (evenly thinned)
 # a step of the table this many times its median is a pause of the logger (rows missing, not
 # cells): the input over it is the sample before it, held
 PAUSE_STEPS = 3.0
+# two samples of a column at most this many times its median sample spacing apart bound no gap
+REGULAR_SPACING = 1.5
 
 
 def fill_input(t: FloatArray, values: FloatArray, interpolate: bool) -> Filled:
@@ -56,7 +58,9 @@ def fill_input(t: FloatArray, values: FloatArray, interpolate: bool) -> Filled:
     except a row that follows a pause of the logger (a table step over :data:`PAUSE_STEPS`
     times the median): the input held over that step is wrong by the change over the step.
     A column with no sample at all is 0 everywhere, with sigma 0 (the caller decides what a
-    missing sensor means)."""
+    missing sensor means).  A row between two samples at most :data:`REGULAR_SPACING` times
+    the column's median sample spacing apart is no gap (a sensor slower than the table):
+    filled, with sigma 0."""
     n = t.size
     v = np.asarray(values, dtype=float)
     ok = np.isfinite(v)
@@ -80,13 +84,23 @@ def fill_input(t: FloatArray, values: FloatArray, interpolate: bool) -> Filled:
     else:
         filled = np.where(prev >= 0, v[np.maximum(prev, 0)], vs[0])
         span = np.where(prev >= 0, before, after)
-    gap = ~ok
+    # rows between two samples no further apart than the column's own spacing allows are not
+    # a gap: a sensor slower than the table (a 20 Hz IMU in a 100 Hz table, NaN between its
+    # samples) is filled there as its own rate gives it.  A column at the table's rate has
+    # its spacing the table's step, so one missing row is a gap as before.  (Every row between
+    # two 20 Hz samples taken for a gap: the Revs lap's fused 0.41 -> 1.31 deg.)
+    own_step = float(np.median(np.diff(ts))) if ts.size > 1 else np.inf
+    regular = (before + after <= REGULAR_SPACING * own_step) | (np.minimum(before, after) < own_step) & (
+        np.isinf(before) | np.isinf(after)
+    )  # between two samples, or within one spacing before the first or after the last
+    gap = ~ok & ~regular
     length = np.where(gap, np.minimum(before + after, t[-1] - t[0]), 0.0)
     paused = pause & ok
     span = np.where(paused, step, span)
     length = np.where(paused, step, length)
     need = gap | paused
-    sigma[need] = _change_sigma(ts, vs, span[need])
+    if need.any():
+        sigma[need] = _change_sigma(ts, vs, span[need])
     return Filled(filled, sigma, length)
 
 
