@@ -138,6 +138,7 @@ from sideslip.methods.roll_index import ROLL_PARAMS, Inputs, estimate_roll_index
 from sideslip.models.roll import compensate_ay
 from sideslip.models.single_track import V_MIN as SINGLE_TRACK_V_MIN
 from sideslip.models.single_track import continuous_arrays, single_track_row
+from sideslip.signals import hold, sample_step
 from sideslip.vehicle import Vehicle
 
 FloatArray = NDArray[np.float64]
@@ -272,15 +273,29 @@ def kinematic_beta(vx: FloatArray, delta: FloatArray, vehicle: Vehicle) -> Float
     return np.asarray(np.arctan2(vy, vx), dtype=float)
 
 
+HELD_SPACINGS = 1.5  # a sample is held this many of its own spacings, then the row is a gap
+
+
 def _steps(t: FloatArray) -> FloatArray:
     dt = np.diff(t)
     return np.append(dt, dt[-1] if dt.size else 0.01)
 
 
 def _fresh(drive: Drive, *names: str) -> NDArray[np.bool_]:
+    """Rows where each column of ``names`` has a sample no older than
+    :data:`HELD_SPACINGS` of its own sample spacing (the observer's correction uses it, held;
+    older, the row runs open loop).  A sensor slower than the table, or on a union time line
+    of several buses, has NaN between its samples: each such row was taken open loop, which
+    an unstable model (the Revs car's single-track matrix at speed) cannot carry;
+    obs_modified_nocomp read the Revs lap with its IMU and CAN rows interleaved at 20.8 deg
+    (1.18 as logged)."""
     ok = np.ones(len(drive), dtype=bool)
     for name in names:
-        ok &= np.isfinite(drive[name]) if name in drive else False
+        if name not in drive:
+            return np.zeros(len(drive), dtype=bool)
+        col = drive[name]
+        age = hold(col, drive.t)[1]
+        ok &= age <= HELD_SPACINGS * sample_step(drive.t, col)
     return ok
 
 
