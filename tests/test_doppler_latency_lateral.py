@@ -96,6 +96,21 @@ def test_a_few_rows_missing_from_the_roll_gyro_keep_its_term() -> None:
     assert abs(found[0] - 0.1) < 2.5 * found[1]
 
 
+def test_an_imu_slower_than_the_table_is_read_at_its_own_rate() -> None:
+    """slalom_low_mu 0.1 s late with the IMU on every second row only (a 50 Hz IMU in the
+    100 Hz table, NaN between its samples): interpolated between its samples, the fit still
+    decides the latency (before, every span held a NaN row and the fit gave nothing)."""
+    drive = late_drive("slalom_low_mu", 0.1)
+    data = dict(drive.data)
+    for name in ("ax", "ay", "az", "wx", "wy", "wz"):
+        col = drive[name].copy()
+        col[1::2] = np.nan
+        data[name] = col
+    found = lateral_doppler_latency(Drive(drive.t, data, drive.meta, drive.path))
+    assert found is not None and found[1] < 0.02
+    assert abs(found[0] - 0.1) < 2.5 * found[1]
+
+
 def test_a_sensor_gap_leaves_its_epochs_out() -> None:
     """Ten seconds of accelerometer gap (NaN) in the slalom: the epochs that would read it are
     left out, the rest still decide, and nothing non-finite comes out."""

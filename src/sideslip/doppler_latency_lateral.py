@@ -56,7 +56,7 @@ from numpy.typing import NDArray
 from sideslip import gnss
 from sideslip.drive import Drive
 from sideslip.frames import wrap_angle
-from sideslip.signals import reversing
+from sideslip.signals import interpolate, reversing, sample_step
 from sideslip.vehicle import G
 
 FloatArray = NDArray[np.float64]
@@ -79,6 +79,7 @@ ROLL_FIT_GAIN = 0.9  # the roll fit is taken where its residual scale is below t
 ROLL_SEGMENT_S = 120.0  # the integrated roll gyro's offset and drift: one pair per segment
 HUBER_K = 1.5  # Huber threshold, in robust sigmas of the residual
 MIN_ROLL_GYRO_SHARE = 0.95  # of the rows: a roll gyro with more gaps is not integrated
+REGULAR_SPACING = 1.5  # samples at most this x their median spacing apart bound no gap
 
 
 Lookup = Callable[[FloatArray, FloatArray], FloatArray]
@@ -170,6 +171,20 @@ def _huber(
     return beta, inv, resid
 
 
+def _sampled(t: FloatArray, x: FloatArray) -> FloatArray:
+    """Column ``x`` linearly interpolated between its samples where they are at most
+    :data:`REGULAR_SPACING` of their own median spacing apart, NaN in its gaps: an IMU slower
+    than the table (NaN between its samples) is read at its own rate, not as gaps everywhere
+    (the fit read nothing from a 50 Hz IMU in a 100 Hz table)."""
+    x = np.asarray(x, dtype=float)
+    ok = np.isfinite(x)
+    if ok.all() or ok.sum() < 2:
+        return x
+    filled = interpolate(x, t, REGULAR_SPACING * sample_step(t, x))
+    filled[ok] = x[ok]
+    return filled
+
+
 def lateral_doppler_latency(
     drive: Drive, lever_x_m: float = 0.0, lever_z_m: float = 0.0, lr_m: float = 0.0
 ) -> tuple[float, float, float] | None:
@@ -193,16 +208,16 @@ def lateral_doppler_latency(
     spacing = float(np.median(np.diff(tc)))
     if spacing > MAX_EPOCH_SPACING_S * EPOCH_SPACING_TOLERANCE:
         return None
-    ay = np.asarray(drive["ay"], dtype=float)
-    wz = np.asarray(drive["wz"], dtype=float)
+    ay = _sampled(t, drive["ay"])
+    wz = _sampled(t, drive["wz"])
     bad = ~(np.isfinite(ay) & np.isfinite(wz))
     # reversing (a signed wheel or CAN speed): the path's left is the body's right there
     cum_bad = _running_integral(t, (bad | reversing(drive)).astype(float))
     cum_ay = _running_integral(t, np.where(bad, 0.0, ay))
     wz_clean = np.where(bad, 0.0, wz)
     wx_clean = None
+    wx_raw = _sampled(t, drive["wx"]) if "wx" in drive else np.full(t.size, np.nan)
     if "wx" in drive:
-        wx_raw = np.asarray(drive["wx"], dtype=float)
         wx_clean = np.where(np.isfinite(wx_raw), wx_raw, 0.0)
     edge = RATE_HALF_S + 1.0
     use = (
@@ -245,11 +260,11 @@ def lateral_doppler_latency(
         return _span_mean(at, moved, lo - shift, hi - shift)
 
     roll = None
-    wx_ok = np.isfinite(drive["wx"]) if "wx" in drive else np.zeros(t.size, dtype=bool)
+    wx_ok = np.isfinite(wx_raw)
     if wx_ok.mean() >= MIN_ROLL_GYRO_SHARE:
         # the roll gyro's gaps (an IMU's first rows, dropouts) interpolated: a gap of a few
         # rows took the roll term away (dlc_bank with the IMU 20 ms late: no fit at all)
-        wx = np.interp(t, t[wx_ok], np.asarray(drive["wx"], dtype=float)[wx_ok])
+        wx = np.interp(t, t[wx_ok], wx_raw[wx_ok])
         roll = G * _running_integral(t, wx - float(np.median(wx)))
     per_sample = max(2.0 * RATE_HALF_S / spacing, 1.0)
     one_segment = np.zeros(k.size, dtype=np.intp)
