@@ -146,6 +146,13 @@ def _predict(x, P, u, dt, cfg, q, rows, xn, Pn, F, dr, qk, tmp):
         qk[IVX] += (vy * vy * q_r + u[U_QAX]) * dt
         qk[IVY] += u[U_QLAT] * dt
         qk[ICY] += G * G * u[U_QWX] * dt  # the roll gyro drives the bank (c_y)
+        # the same fill errors move the position within the step: a velocity error growing
+        # as a random walk over dt leaves dt^3 / 3 of its density in the position (a logger's
+        # 2 s pause in a slalom: the heading held wrong puts the track metres off, and the
+        # first fixes after it were gated out as outliers)
+        q_pos = ((vx * vx + vy * vy) * q_r + u[U_QAX] + u[U_QLAT]) * dt * dt * dt / 3.0
+        qk[IE] += q_pos
+        qk[IN] += q_pos
     _, q_gm = gauss_markov_nb(dt, cfg[C_GM_TAU], cfg[C_GM_SIGMA])  # GNSS position error
     qk[IPE] += q_gm
     qk[IPN] += q_gm
