@@ -431,3 +431,28 @@ def test_every_axle_curve_reaches_the_engine_and_stays_honest(shape: float) -> N
     if shape != 0.0:
         brush = run_method("fused", drive, vehicle)
         assert abs(rmse - metrics(drive, brush.series)["beta_rmse_deg"]) > 0.005
+
+
+def test_the_causal_yaw_rate_update_reads_a_slower_gyros_own_samples():
+    """The causal filter's yaw-rate update at a node is the mean of the gyro's samples among
+    the node step's rows.  A 20 Hz gyro in a 100 Hz table (a sample on every fifth row, the
+    rows between holding it): the held rows made the update 0.8 x the previous sample plus
+    0.2 x the current one, 40 ms late.  Now the sample itself (to rounding); a step without a
+    sample takes the node's own (held) row, and a gyro on every row keeps the rows' mean."""
+    from sideslip.methods.fused import _node_inputs
+    from sideslip.models.fused_process import U_WZ
+
+    t = np.arange(0.0, 10.0, 0.01)
+    sample = np.zeros(t.size, dtype=bool)
+    sample[::5] = True
+    wz_true = np.sin(2.0 * np.pi * 0.5 * t)
+    held = wz_true[np.flatnonzero(sample)[np.cumsum(sample) - 1]]
+    inputs = tuple(held if k == U_WZ else np.zeros(t.size) for k in range(7))
+    q_gap = [np.zeros(t.size)] * 4
+    idx = np.arange(0, t.size, 5)
+    U = _node_inputs(t, idx, inputs, q_gap, False, 5, causal=True, wz_samples=sample)
+    np.testing.assert_allclose(U[1, :, U_WZ], wz_true[idx], atol=1e-12)
+    every_row = _node_inputs(t, idx, inputs, q_gap, False, 5, causal=True)
+    first = np.maximum(idx - 4, 0)
+    rows_mean = np.array([held[a : b + 1].mean() for a, b in zip(first, idx, strict=True)])
+    np.testing.assert_allclose(every_row[1, :, U_WZ], rows_mean, atol=1e-12)
