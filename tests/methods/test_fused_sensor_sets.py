@@ -195,22 +195,44 @@ def test_revs_lap_with_an_imu_slower_than_its_table_reads_as_the_same_imu_in_its
 
 
 @pytest.mark.realdata
-def test_revs_lap_with_a_file_twice_too_stiff_says_so_in_beta_std():
-    """The lap at 100 Hz with the file's cornering stiffnesses doubled: the rear relation
-    asks for 0.35 x the file's through the car's noisy force, as the 20 Hz log asks with the
-    file right, so the fallback takes the file's stiffness and reads 0.92 deg.  The drive
-    cannot tell the two apart; the difference between the file's and the bound's beta joins
-    beta_std: 84 % inside 2 sigma before, 94 % now (measured).  Bounds: >= 90 %, and the
-    estimate no worse than before (0.95)."""
+def test_revs_lap_at_100_hz_with_a_file_twice_too_stiff_keeps_the_bound():
+    """The lap at 100 Hz with the file's cornering stiffnesses doubled asks for 0.35 x the
+    file's rear stiffness through the car's noisy force.  A 100 Hz accelerometer keeps the
+    car's vibration above the force's low-pass (the right file learns 0.94 x), so this is a
+    file too stiff, not the 20 Hz log's flattening: the scale is held at the bound, 0.5
+    (measured 0.233 deg, 96 % inside 2 sigma; with the file's stiffness, as before, 0.92).
+    Bounds: fused_filter's 0.34 on the same file, and >= 90 % inside 2 sigma."""
     if not REVS.exists():
         pytest.skip(f"real data absent: {REVS} (../shared/data is not shipped with the repo)")
     drive, vehicle = _revs()
     stiff = vehicle.with_changes(cf=2.0 * vehicle.cf, cr=2.0 * vehicle.cr)
     est = run_method("fused", drive, stiff)
+    assert est.params["rear_stiffness_scale"] == 0.5
+    assert est.params["rear_stiffness_scale_note"].startswith("held at 0.5")
+    assert metrics(drive, est.series)["beta_rmse_deg"] < 0.34
+    assert two_sigma_share(drive, est) >= 0.90
+
+
+@pytest.mark.realdata
+def test_revs_lap_at_20_hz_with_a_file_twice_too_stiff_says_so_in_beta_std():
+    """The lap logged at 20 Hz (every fifth row) with the file's stiffnesses doubled: the
+    scale asked below half is there as likely the aliased vibration's flattening as the file
+    (the right file asks 0.35-0.49 x at 20 Hz), so the fallback takes the file's stiffness,
+    and the difference between the file's and the bound's beta joins beta_std: 84 % inside
+    2 sigma without it, 94 % with it (measured).  Bounds: >= 90 %, a spread above 0.1 deg,
+    and the estimate no worse than the file's alone (0.95)."""
+    if not REVS.exists():
+        pytest.skip(f"real data absent: {REVS} (../shared/data is not shipped with the repo)")
+    drive, vehicle = _revs()
+    every_fifth = slice(None, None, 5)
+    cols = {"t": drive.t[every_fifth], **{k: v[every_fifth] for k, v in drive.data.items()}}
+    logged = drive_from_columns(cols, dict(drive.meta))
+    stiff = vehicle.with_changes(cf=2.0 * vehicle.cf, cr=2.0 * vehicle.cr)
+    est = run_method("fused", logged, stiff)
     assert est.params["rear_stiffness_scale_note"].startswith("not learned")
     assert est.params["beta_std_stiffness_fallback_deg"] > 0.1
-    assert two_sigma_share(drive, est) >= 0.90
-    assert metrics(drive, est.series)["beta_rmse_deg"] < 0.95
+    assert two_sigma_share(logged, est) >= 0.90
+    assert metrics(logged, est.series)["beta_rmse_deg"] < 0.95
 
 
 def test_a_file_far_too_stiff_on_a_clean_drive_keeps_the_bound():

@@ -89,9 +89,10 @@ Slow loggers: a table that samples a vibrating car's accelerometer at 10-50 Hz f
 vibration into the band of the tyre forces.  The smoother's body-velocity random walk is then
 at least the accelerometer's own white noise (sigma_a sqrt(dt), from the drive's successive
 differences), and where the rear stiffness it learns falls below half the file's through a
-force noisier than the relation's floor (errors in variables flatten the learned slope: the
-tyre reads soft) it runs again with the file's stiffness, not learned, its prior sigma in
-``beta_std`` (``stiffness_bound_fallback``); without GNSS the force's zero-phase low-pass
+force noisier than the relation's floor, from an accelerometer sampled at most 25 Hz (errors
+in variables flatten the learned slope: the tyre reads soft) it runs again with the file's
+stiffness, not learned, its prior sigma and its difference from the bound's estimate in
+``beta_std`` (``stiffness_bound_fallback``, ``stiffness_fallback_max_rate_hz``); without GNSS the force's zero-phase low-pass
 needs half the single pass's time constant for the same noise (Revs lap at 20 Hz 1.41 -> 0.41
 deg with the three, benchmarks/results/real_log_rates.md).
 
@@ -682,6 +683,8 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     vrw_floor = accel_noise_sigma(ay_samples) * math.sqrt(sample_step(t, ay_samples)) if n > 1 else 0.0
     force_var = force_noise_variance(t, ay_samples, tau_f, nz, causal=not smooth)
     force_noise = float(np.sqrt(np.median(force_var))) if n else 0.0  # m/s^2, per relation
+    imu_step = sample_step(t, ay_samples) if n > 1 else 0.0
+    imu_rate_hz = 1.0 / imu_step if imu_step > 0 else math.inf
     # a gap's fill of the lateral reading is one error over the whole gap, in every axle
     # relation inside it: its variance quoted per axle_error_tau_s like the relations' own
     fa = filled["ay"]
@@ -928,7 +931,8 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     fallback_spread = None  # rad per node: beta with the file's stiffness against the bound's
     wanted = float(np.median(xs[:, ISR]))
     noisy = force_noise > nz.force_sigma
-    if smooth and nz.stiffness_bound_fallback and wanted < SCALE_MIN and noisy:
+    aliased = imu_rate_hz <= nz.stiffness_fallback_max_rate_hz
+    if smooth and nz.stiffness_bound_fallback and wanted < SCALE_MIN and noisy and aliased:
         # the rear relation asked for a stiffness below half the file's while the force it
         # reads carries more of the accelerometer's noise than the relation's own floor:
         # errors in variables (the slip the noise moves through the velocity's integration

@@ -79,6 +79,14 @@ class FusedSettings:
     # the smoother: where the rear scale it learned falls below SCALE_MIN through a force
     # noisier than force_sigma, run again with the file's stiffness, not learned (fused.fuse)
     stiffness_bound_fallback: bool = True
+    # ... and only for an accelerometer sampled at most this fast (Hz): below it the car's
+    # vibration (wheel, engine and road, 10-30 Hz) folds into the relation's band, as on the
+    # Revs lap logged at 20 Hz (scale asked 0.35-0.49 with the file right); sampled faster it
+    # stays above the force's low-pass (the same lap at 100 / 50 / 33 Hz learns 0.94 / 0.93 /
+    # 0.88-0.91), so a scale asked below half there is a file more than twice too stiff, and
+    # the bound stays (the lap at 100 Hz with cf, cr doubled: 0.92 deg on the file's
+    # stiffness, 0.23 held at the bound)
+    stiffness_fallback_max_rate_hz: float = 25.0
     mu_prior: float = 1.0  # dry asphalt
     mu_prior_sigma: float = 0.35
     # mu's prior mean from the drive's own understeer angle where the drive used at least 90 %
