@@ -9,7 +9,7 @@ import pytest
 
 from sideslip.methods import fused_engine as eng
 from sideslip.methods.fused import AUX_KEYS, _node_weights
-from sideslip.models.fused_process import ICX, ICY, ISG, ISR, IVX, IVY
+from sideslip.models.fused_process import ICX, ICY, IPSI, ISG, ISR, IVX, IVY
 from sideslip.vehicle import G
 
 
@@ -276,3 +276,29 @@ def test_relaxation_lag_is_tau_times_the_slip_rate_on_a_ramp_and_ignores_row_noi
     noise = np.random.default_rng(0).normal(0.0, 0.001 * 10.0 / l_r, n)
     rms = np.sqrt(np.mean(lag_std(noise) ** 2))
     assert 0.0008 < rms < 0.0012
+
+
+def test_a_heading_beyond_the_linear_range_is_turned_onto_the_doppler_course() -> None:
+    """Analytic case: a state at 20 m/s with 2 deg of sideslip, its heading 40 deg off the
+    truth.  With a heading sigma of 54 deg (a logger's pause) the Doppler epoch turns the
+    heading so that the state's velocity over ground has the Doppler's course: the heading
+    ends at the true one to float precision (the slip is the truth's), the covariance is
+    unchanged.  With a heading sigma of 10 deg (inside the linear range) or below the speed
+    floor nothing moves."""
+    beta = math.radians(2.0)
+    psi_true = math.radians(30.0)
+    x = np.zeros(len(eng.VAR_STATES) + 20)
+    x[IVX], x[IVY] = 20.0 * math.cos(beta), 20.0 * math.sin(beta)
+    course = psi_true + beta
+    y_e, y_n = 20.0 * math.cos(course), 20.0 * math.sin(course)
+    for sigma_deg, speed, turned in ((54.0, 20.0, True), (10.0, 20.0, False), (54.0, 0.5, False)):
+        xs = x.copy()
+        xs[IPSI] = psi_true + math.radians(40.0)
+        P = np.eye(xs.size)
+        P[IPSI, IPSI] = math.radians(sigma_deg) ** 2
+        P0 = P.copy()
+        k = speed / 20.0
+        assert eng._align_heading(xs, P, k * y_e, k * y_n, 1.0) is turned
+        expected = psi_true if turned else psi_true + math.radians(40.0)
+        assert abs(xs[IPSI] - expected) < 1e-12
+        np.testing.assert_array_equal(P, P0)

@@ -179,22 +179,27 @@ def test_a_logger_pause_does_not_turn_the_heading_for_good(method, bound_deg) ->
 
 
 @pytest.mark.commonroad
-def test_a_logger_pause_in_a_limit_slalom_leaves_the_track_free_to_move() -> None:
+@pytest.mark.parametrize(("method", "bound_deg"), [("fused", 1.5), ("fused_filter", 4.0)])
+def test_a_logger_pause_in_a_limit_slalom_leaves_the_track_free_to_move(method, bound_deg) -> None:
     """cr_limit_slalom (CommonRoad's multi-body car, beta to 4.7 deg, the yaw rate reversing
     every 2 s, 10 Hz Doppler with multipath bursts) with three 2 s pauses of the logger inside
     the slalom.  The inputs held over a pause carry the heading and v_y wrong, and so the
     track: the same fill errors now move the position within the step (their density times
     dt^3 / 3).  Before, the first fixes after a pause lay metres off a track held to under a
-    metre, were gated out, and fused read 2.45 deg with 75 % inside 2 sigma; now 0.91 deg with
-    97 % (measured).  Bounds between the two."""
+    metre, were gated out, and fused read 2.45 deg with 75 % inside 2 sigma; then 0.91 deg with
+    97 % (measured).  The heading after a pause is tens of degrees off (sigma 54 deg), beyond
+    the Doppler relation's linear range: fused_filter's first update put the error into v_y,
+    and it read 11.8 deg with 79 %; the heading is now first turned onto the Doppler's course
+    (fused_engine._align_heading): fused_filter 1.72 deg with 100 %, fused 0.79 with 97 %
+    (measured).  Bounds near the geometric means of before and after."""
     from sideslip.simulate import SensorConfig, simulate
     from sideslip.simulate.run import _lookup
 
     config = SensorConfig().with_overrides(_lookup("cr_limit_slalom").sensor_overrides)
     whole = simulate("cr_limit_slalom", seed=0, config=config)
     drive = logger_pauses(whole)
-    est = run_method("fused", drive, load_vehicle(whole.meta["vehicle"]))
-    assert metrics(drive, est.series)["beta_rmse_deg"] < 1.5
+    est = run_method(method, drive, load_vehicle(whole.meta["vehicle"]))
+    assert metrics(drive, est.series)["beta_rmse_deg"] < bound_deg
     assert two_sigma_share(drive, est) >= 0.90
 
 
