@@ -9,7 +9,7 @@ import pytest
 
 from sideslip.methods import fused_engine as eng
 from sideslip.methods.fused import AUX_KEYS, _node_weights
-from sideslip.models.fused_process import ICX, ICY, IPSI, ISG, ISR, IVX, IVY
+from sideslip.models.fused_process import ICX, ICY, IMU, IPSI, ISG, ISR, IVX, IVY, NX_CORE
 from sideslip.vehicle import G
 
 
@@ -302,3 +302,33 @@ def test_a_heading_beyond_the_linear_range_is_turned_onto_the_doppler_course() -
         expected = psi_true if turned else psi_true + math.radians(40.0)
         assert abs(xs[IPSI] - expected) < 1e-12
         np.testing.assert_array_equal(P, P0)
+
+
+def test_a_rear_slip_past_full_sliding_against_a_small_force_maps_back_onto_the_brush_curve() -> None:
+    """Analytic case: a car at 20 m/s, no yaw rate, whose state says a rear slip of 2.5 x the
+    brush curve's full sliding while the measured rear force is 0.3 of the axle's limit.
+    The target v_y puts the rear slip where the model's own forward curve
+    (``models.axle_force.fiala_force``) gives that force, to float precision.  A force over half
+    the limit, or a state slip inside 1.2 x full sliding, is no contradiction (NaN); nor is
+    another curve shape."""
+    from sideslip.models.axle_force import fiala_force
+    from sideslip.models.fused_measurements import A_CR, A_LR, A_NR, A_SHAPE
+
+    axle = np.array([1.2, 1.4, 60.0, 70.0, 0.54 * G, 0.46 * G, 0.0])
+    lim = axle[A_NR]
+    z_sl = 3.0 * lim / axle[A_CR]
+    x = np.zeros(NX_CORE)
+    x[IVX], x[ISR], x[IMU] = 20.0, 1.0, 1.0
+    u = np.zeros(11)
+    dr = np.zeros(NX_CORE)
+    x[IVY] = 2.5 * z_sl * 20.0  # rear slip z = -(v_y - l_r r) / v_x = -2.5 z_sl
+    vy = eng._rear_slip_target(x, u, -0.3 * lim, axle, 0.0, dr)
+    z = -(vy - axle[A_LR] * 0.0) / 20.0
+    assert -z_sl < z < 0.0
+    assert abs(fiala_force(z, axle[A_CR], lim)[0] - (-0.3 * lim)) < 1e-9
+    assert math.isnan(eng._rear_slip_target(x, u, -0.6 * lim, axle, 0.0, dr))
+    x[IVY] = 1.1 * z_sl * 20.0
+    assert math.isnan(eng._rear_slip_target(x, u, -0.3 * lim, axle, 0.0, dr))
+    x[IVY] = 2.5 * z_sl * 20.0
+    axle[A_SHAPE] = 1.3
+    assert math.isnan(eng._rear_slip_target(x, u, -0.3 * lim, axle, 0.0, dr))

@@ -203,6 +203,27 @@ def test_a_logger_pause_in_a_limit_slalom_leaves_the_track_free_to_move(method, 
     assert two_sigma_share(drive, est) >= 0.90
 
 
+@pytest.mark.commonroad
+def test_without_gnss_a_slip_left_past_full_sliding_by_a_pause_returns_to_the_tyres() -> None:
+    """cr_limit_slalom without GNSS, three 1 s pauses of the logger.  The lateral reading held
+    over a pause left v_y 2.5 m/s off, the rear slip past the brush curve's full sliding,
+    where the relation's slope is 0: on the straight after the last pause (force 0) the tyres
+    gave nothing, v_y drifted on to 5 m/s and fused read 6.90 deg with 79 % inside 2 sigma.
+    Where the state's slip contradicts a force under half the limit for 0.5 s, v_y is now
+    moved onto the curve (fused_engine._rear_slip_target): 1.27 deg with 87 % (measured;
+    still under the 90 % target: the errors left sit in the slalom right after the pauses).
+    Bounds: the geometric mean of before and after, and a share above the 79 % before."""
+    from sideslip.simulate import SensorConfig, simulate
+    from sideslip.simulate.run import _lookup
+
+    config = SensorConfig().with_overrides(_lookup("cr_limit_slalom").sensor_overrides)
+    whole = without_gnss(simulate("cr_limit_slalom", seed=0, config=config))
+    drive = logger_pauses(whole, seconds=1.0)
+    est = run_method("fused", drive, load_vehicle(whole.meta["vehicle"]))
+    assert metrics(drive, est.series)["beta_rmse_deg"] < 3.0
+    assert two_sigma_share(drive, est) >= 0.85
+
+
 def without_gnss(drive):
     return replace(drive, data={k: v for k, v in drive.data.items() if not k.startswith("gnss")})
 
