@@ -92,9 +92,9 @@ differences), and where the rear stiffness it learns falls below half the file's
 force noisier than the relation's floor, from an accelerometer sampled at most 25 Hz (errors
 in variables flatten the learned slope: the tyre reads soft) it runs again with the file's
 stiffness, not learned, its prior sigma and its difference from the bound's estimate in
-``beta_std`` (``stiffness_bound_fallback``, ``stiffness_fallback_max_rate_hz``); without GNSS the force's zero-phase low-pass
-needs half the single pass's time constant for the same noise (Revs lap at 20 Hz 1.41 -> 0.41
-deg with the three, benchmarks/results/real_log_rates.md).
+``beta_std`` (``stiffness_bound_fallback``, ``stiffness_fallback_max_rate_hz``); without GNSS
+the force's zero-phase low-pass needs half the single pass's time constant for the same noise
+(Revs lap at 20 Hz 1.41 -> 0.41 deg with the three, benchmarks/results/real_log_rates.md).
 
 Multipath bursts the forward Doppler check lets in (its inertial anchor drifts until it admits
 a long burst's middle) stand out from the smoothed track: the smoother looks at each Doppler
