@@ -23,7 +23,7 @@ from numpy.typing import NDArray
 
 FloatArray = NDArray[np.float64]
 
-__all__ = ["Filled", "fill_input", "gap_increments", "gap_noise_density"]
+__all__ = ["Filled", "causal_between_samples", "fill_input", "gap_increments", "gap_noise_density"]
 
 
 class Filled(NamedTuple):
@@ -154,3 +154,30 @@ def gap_noise_density(t: FloatArray, sigma: FloatArray) -> FloatArray:
     inc = gap_increments(t, sigma)
     dt = np.diff(t, prepend=t[0])
     return np.asarray(np.where(dt > 0.0, inc / np.where(dt > 0.0, dt, 1.0), 0.0), dtype=float)
+
+
+def causal_between_samples(
+    t: FloatArray, rows: NDArray[np.intp], values: FloatArray, nodes: NDArray[np.intp], max_span_s: float
+) -> FloatArray:
+    """A column of a sensor slower than its table (``values`` holding the sample at ``rows``
+    on the rows up to the next one) linearly interpolated between two samples at most
+    ``max_span_s`` apart wherever the later sample is in by the node (of the sorted row
+    indices ``nodes``) that closes the row's step; held where it is not (a causal filter
+    whose node precedes the next sample cannot read it) and outside the samples.  The
+    sample rows keep their values."""
+    n = t.size
+    out = np.array(values, dtype=float, copy=True)
+    if rows.size < 2 or nodes.size == 0:
+        return out
+    r = np.arange(n)
+    k = np.searchsorted(rows, r, side="right") - 1  # the sample at or before each row
+    inside = (k >= 0) & (k < rows.size - 1)
+    kk = np.clip(k, 0, rows.size - 2)
+    a, b = rows[kk], rows[kk + 1]
+    # the node closing each row's step: the first node after the row (the last row: itself)
+    m = np.searchsorted(nodes, r, side="right")
+    closing = np.where(m < nodes.size, nodes[np.minimum(m, nodes.size - 1)], n - 1)
+    ok = inside & (b <= closing) & (t[b] - t[a] <= max_span_s) & (r != a)
+    w = np.where(ok, (t - t[a]) / np.where(t[b] > t[a], t[b] - t[a], 1.0), 0.0)
+    out[ok] = values[a[ok]] + w[ok] * (values[b[ok]] - values[a[ok]])
+    return out
