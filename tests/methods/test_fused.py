@@ -624,3 +624,36 @@ def test_a_gyro_flipped_against_the_gnss_course_is_one_clear_error(receiver):
         assert "\n" not in str(err.value)
     est = run_method("fused", drive, vehicle)  # the same drive with its gyro as mounted runs
     assert np.isfinite(est["beta"]).all()
+
+
+@pytest.mark.parametrize(
+    ("scenario", "fault", "message"),
+    [
+        ("urban_course", "gnss", "column 'gnss_ve': the GNSS course turns opposite to the yaw rate"),
+        ("demo", "gnss", "column 'gnss_ve': the GNSS course turns opposite to the yaw rate"),
+        ("urban_course", "sae", "column 'wz': the yaw rate and ay turn opposite to the GNSS course .* SAE axes"),
+    ],
+)
+def test_a_course_turning_against_the_gyro_names_the_culprit(scenario, fault, message):
+    """The GNSS in north-east order (gnss_ve and gnss_vn, gnss_e and gnss_n swapped, as a NED
+    receiver's columns put into ENU names) turns its course against the yaw rate, as a gyro
+    mounted upside down does; the steering (and ay, where the drive turns enough for the
+    units check's slope) turning with the gyro names the GNSS columns instead (measured
+    correlations -0.98 / -0.99 against the course, 1.00 with the steering).  An IMU in SAE
+    axes (ay and wz both flipped) agrees with itself and turns against the steering: the IMU
+    is named.  One line each, and the drive as recorded runs."""
+    from dataclasses import replace
+
+    from sideslip.errors import InputError
+
+    drive = sim_drive(scenario)
+    d = drive.data
+    if fault == "gnss":
+        data = {**d, "gnss_ve": d["gnss_vn"], "gnss_vn": d["gnss_ve"], "gnss_e": d["gnss_n"], "gnss_n": d["gnss_e"]}
+    else:
+        data = {**d, "wz": -np.asarray(d["wz"]), "ay": -np.asarray(d["ay"])}
+    vehicle = load_vehicle(drive.meta["vehicle"])
+    with pytest.raises(InputError, match=message) as err:
+        run_method("kkf", replace(drive, data=data), vehicle)
+    assert "\n" not in str(err.value)
+    assert ("north-east (NED) order" in str(err.value)) == (fault == "gnss")

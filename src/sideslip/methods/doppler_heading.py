@@ -128,15 +128,32 @@ def check_yaw_rate_sign(
     t: FloatArray, wz: FloatArray, samples: CourseSamples, path: str, min_turn_rad: float = 1.5,
     spacing_s: float = SIGN_CHECK_SPACING_S,
 ) -> float | None:
-    """Fail when the yaw gyro turns the opposite way to the GNSS course.
+    """Fail when the yaw gyro turns the opposite way to the GNSS course
+    (:func:`yaw_rate_course_correlation` below -0.5): :class:`InputError` naming column
+    ``wz``; returns the correlation, or None where the drive cannot tell."""
+    corr = yaw_rate_course_correlation(t, wz, samples, min_turn_rad, spacing_s)
+    if corr is not None and corr < -0.5:
+        raise InputError(
+            path,
+            f"yaw rate turns opposite to the GNSS course (correlation {corr:.2f}): expected wz "
+            "> 0 in a left turn (ISO 8855, z up); is the gyro axis flipped?",
+            column="wz",
+        )
+    return corr
+
+
+def yaw_rate_course_correlation(
+    t: FloatArray, wz: FloatArray, samples: CourseSamples, min_turn_rad: float = 1.5,
+    spacing_s: float = SIGN_CHECK_SPACING_S,
+) -> float | None:
+    """How the yaw gyro's turns follow the GNSS course's.
 
     Compares course changes between fresh samples ``spacing_s`` or more apart (at most 2.5x
     that) with the integrated ``wz`` over the same interval: their correlation with both means
     removed (a raw gyro's bias adds the same turn to every interval).  Returns it, or None
     when the drive turns too little to judge (total |course change| below ``min_turn_rad``,
-    or fewer than :data:`SIGN_CHECK_MIN_INTERVALS` intervals).
-    Raises :class:`InputError` naming column ``wz`` when the correlation is below -0.5.
-    Over consecutive 10 Hz epochs a gentle drive's course noise hid the sign (a flipped gyro
+    or fewer than :data:`SIGN_CHECK_MIN_INTERVALS` intervals).  Over consecutive 10 Hz epochs
+    a gentle drive's course noise hid the sign (a flipped gyro
     on the simulated highway: -0.49); over 1 s it reads -0.98.
     """
     rows = samples.rows
@@ -157,15 +174,7 @@ def check_yaw_rate_sign(
         return None
     a, b = dcourse[ok] - dcourse[ok].mean(), dgyro[ok] - dgyro[ok].mean()
     denom = np.sqrt(np.sum(a * a) * np.sum(b * b))
-    corr = float(np.sum(a * b) / denom) if denom > 0 else 0.0
-    if corr < -0.5:
-        raise InputError(
-            path,
-            f"yaw rate turns opposite to the GNSS course (correlation {corr:.2f}): expected wz "
-            "> 0 in a left turn (ISO 8855, z up); is the gyro axis flipped?",
-            column="wz",
-        )
-    return corr
+    return float(np.sum(a * b) / denom) if denom > 0 else 0.0
 
 
 def knot_times(t0: float, t1: float, spacing: float) -> FloatArray:

@@ -25,7 +25,13 @@ from sideslip.estimate import Estimate, check_estimate
 from sideslip.imu_lever import drive_at_cg
 from sideslip.imu_timing import drive_on_gnss_clock
 from sideslip.settings import make_settings, settings_dict
-from sideslip.units_check import check_lateral_axes, check_lateral_units, check_longitudinal
+from sideslip.units_check import (
+    MIN_CORRELATION,
+    check_lateral_axes,
+    check_lateral_units,
+    check_longitudinal,
+    lateral_slope,
+)
 from sideslip.vehicle import Vehicle
 
 MethodFunc = Callable[..., Estimate]  # (drive, vehicle) or (drive, vehicle, settings)
@@ -167,14 +173,69 @@ def check_gyro_sign(drive: Drive) -> None:
     if "wz" not in drive or not ("gnss_ve" in drive or "gnss_e" in drive):
         return
     from sideslip import gnss
-    from sideslip.methods.doppler_heading import CourseSamples, check_yaw_rate_sign
+    from sideslip.methods.doppler_heading import (
+        CourseSamples,
+        check_yaw_rate_sign,
+        yaw_rate_course_correlation,
+    )
     from sideslip.signals import vehicle_speed
 
     if not np.isfinite(drive["wz"]).any():
         return
     cs = gnss.course_samples(drive, vehicle_speed(drive), use_positions=True)
     samples = CourseSamples(cs.rows, cs.course, cs.speed, cs.sigma)
+    corr = yaw_rate_course_correlation(drive.t, drive["wz"], samples)
+    if corr is None or corr >= -0.5:
+        return
+    # the gyro or the GNSS frame: where the lateral accelerometer follows speed x wz tightly
+    # (the IMU's own two axes agree), the course is the one turning the wrong way (east and
+    # north swapped, as in a NED receiver's order, or one of them negated); a gyro mounted
+    # upside down turns against the accelerometer too
+    lateral = lateral_slope(drive)
+    imu_agrees = lateral is not None and lateral[0] > 0.0 and lateral[1] >= MIN_CORRELATION
+    steer = _steer_yaw_correlation(drive)
+    columns = "gnss_ve, gnss_vn" if "gnss_ve" in drive else "gnss_e, gnss_n"
+    if steer is not None and steer > 0.5:
+        # the steering turns with the gyro: the course is the one turning the wrong way
+        also = f", ay follows speed x wz ({lateral[1]:.2f})" if imu_agrees and lateral else ""
+        raise InputError(
+            drive.path,
+            f"the GNSS course turns opposite to the yaw rate (correlation {corr:.2f}), while the "
+            f"steering turns with it ({steer:.2f}{also}): expected {columns} east and north "
+            "(ENU); are they in north-east (NED) order, or one of them negated?",
+            column=columns.split(",")[0],
+        )
+    if imu_agrees and lateral:
+        # the IMU's two axes agree with each other: both flipped (an IMU in SAE axes), or the
+        # GNSS frame where no steering tells which
+        raise InputError(
+            drive.path,
+            f"the yaw rate and ay turn opposite to the GNSS course (correlation {corr:.2f}; ay "
+            f"follows speed x wz, {lateral[1]:.2f}"
+            + (f"; the steering turns against the yaw rate, {steer:.2f}" if steer is not None else "")
+            + "): expected wz > 0 and ay > 0 turning left (ISO 8855); is the IMU in SAE axes (y "
+            "right, z down)"
+            + ("?" if steer is not None else f", or the GNSS {columns} in north-east order?"),
+            column="wz",
+        )
     check_yaw_rate_sign(drive.t, drive["wz"], samples, drive.path)
+
+
+def _steer_yaw_correlation(drive: Drive) -> float | None:
+    """Correlation of the steering angle with the yaw rate over the drive's turns (faster than
+    5 m/s, |w_z| above 0.05 rad/s, at least 5 s of them), or None without either."""
+    from sideslip.signals import vehicle_speed
+
+    if "steer" not in drive:
+        return None
+    steer = np.asarray(drive["steer"], dtype=float)
+    wz = np.asarray(drive["wz"], dtype=float)
+    with np.errstate(invalid="ignore"):
+        rows = np.isfinite(steer) & np.isfinite(wz) & (vehicle_speed(drive) > 5.0) & (np.abs(wz) > 0.05)
+    if rows.sum() < 10 or rows.sum() * drive.dt_median < 5.0:
+        return None
+    c = np.corrcoef(steer[rows], wz[rows])[0, 1]
+    return float(c) if np.isfinite(c) else None
 
 
 def run_method(method: str | Method, drive: Drive, vehicle: Vehicle, settings: Any = None) -> Estimate:
