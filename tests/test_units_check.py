@@ -8,7 +8,14 @@ import pytest
 from sideslip.drive import Drive, drive_from_columns
 from sideslip.errors import InputError
 from sideslip.methods.registry import run_method
-from sideslip.units_check import check_lateral_axes, check_lateral_units, check_longitudinal, lateral_axes
+from sideslip.units_check import (
+    check_lateral_axes,
+    check_lateral_units,
+    check_longitudinal,
+    check_tilt_rate_units,
+    lateral_axes,
+    tilt_excursion,
+)
 from sideslip.vehicle import load_vehicle
 from tests.conftest import sim_drive
 
@@ -144,3 +151,27 @@ def test_an_imu_slower_than_the_table_is_judged_on_its_own_samples():
         slow = Drive(drive.t, data, drive.meta, drive.path)
         assert check_longitudinal(slow) == pytest.approx(1.03, abs=0.05)
         assert check_lateral_units(slow) == pytest.approx(check_lateral_units(drive), abs=0.02)
+
+
+@pytest.mark.parametrize("column", ["wx", "wy"])
+def test_a_roll_or_pitch_rate_in_degrees_per_second_is_named(column):
+    """urban_course with its roll (or pitch) gyro in deg/s: within the 5 rad/s range limit, but
+    the angle it turns within 10 s (its mean removed) reaches 4.4 rad for the roll (0.076 in
+    rad/s); fused read it as the road's bank (9.6 deg beta RMSE).  One line naming the column,
+    the window's first row and the unit."""
+    drive = _scaled(sim_drive("urban_course"), {column: 180.0 / np.pi})
+    with pytest.raises(InputError) as err:
+        check_tilt_rate_units(drive)
+    line = str(err.value)
+    assert f"column '{column}': row " in line and "is it in deg/s?" in line and "\n" not in line
+    with pytest.raises(InputError, match=f"column '{column}'"):
+        run_method("fused", drive, load_vehicle(drive.meta["vehicle"]))
+
+
+def test_a_banked_turn_and_a_drive_in_rad_per_second_pass_the_tilt_check():
+    """The largest valid excursions: entering the 25-degree banked turn, 0.45 rad of roll in
+    10 s (measured), under the 0.8 rad bound; the same drive in deg/s would read 25.7."""
+    drive = sim_drive("banked_turn")
+    check_tilt_rate_units(drive)
+    found = tilt_excursion(drive, "wx")
+    assert found is not None and 0.40 < found[0] < 0.8

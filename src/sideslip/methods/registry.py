@@ -31,6 +31,7 @@ from sideslip.units_check import (
     check_lateral_axes,
     check_lateral_units,
     check_longitudinal,
+    check_tilt_rate_units,
     lateral_slope,
 )
 from sideslip.vehicle import Vehicle
@@ -286,6 +287,7 @@ def run_method(method: str | Method, drive: Drive, vehicle: Vehicle, settings: A
         )
     check_gyro_sign(drive)
     check_lateral_units(drive)
+    check_tilt_rate_units(drive)
     check_longitudinal(drive)
     check_lateral_axes(drive, "steer" in columns_used(method, drive))
     params = vehicle.missing(list(method.vehicle_params))
