@@ -292,3 +292,62 @@ def check_tilt_rate_units(drive: Drive) -> None:
             column=column,
             row=found[1] + 1,
         )
+
+
+GNSS_SPEED_RANGE = (0.7, 1.4)  # GNSS speed over the wheels' (rolling radius, slip: +-10 %)
+GNSS_MIN_S = 10.0  # s of moving GNSS samples the check needs
+GNSS_BASELINE_S = 1.0  # s between the fixes a position speed is taken over
+
+
+def gnss_speed_ratio(drive: Drive, column: str) -> tuple[float, int] | None:
+    """``(median ratio, first row)`` of the GNSS speed (``column`` ``gnss_ve``: the Doppler's
+    horizontal speed; ``gnss_e``: the fixes' distance over about :data:`GNSS_BASELINE_S`)
+    to the wheels' speed over the samples faster than :data:`MIN_SPEED`, or None without
+    both or :data:`GNSS_MIN_S` of such samples."""
+    pair = {"gnss_ve": ("gnss_ve", "gnss_vn"), "gnss_e": ("gnss_e", "gnss_n")}[column]
+    if any(c not in drive for c in pair) or speed_raw(drive) is None:
+        return None
+    v = np.abs(vehicle_speed(drive))
+    a, b = (np.asarray(drive[c], dtype=float) for c in pair)
+    rows = np.flatnonzero(np.isfinite(a) & np.isfinite(b))
+    if rows.size < 10:
+        return None
+    t = drive.t
+    if column == "gnss_ve":
+        speed = np.hypot(a[rows], b[rows])
+        at = rows
+    else:  # each fix against the first one a baseline later
+        later = np.searchsorted(t[rows], t[rows] + GNSS_BASELINE_S)
+        ok = later < rows.size
+        first, last = rows[ok], rows[later[ok]]
+        speed = np.hypot(a[last] - a[first], b[last] - b[first]) / (t[last] - t[first])
+        at = first
+    moving = np.isfinite(v[at]) & (v[at] > MIN_SPEED)
+    if moving.sum() < 10 or moving.sum() * sample_step(t, a) < GNSS_MIN_S:
+        return None
+    return float(np.median(speed[moving] / v[at][moving])), int(at[moving][0])
+
+
+def check_gnss_speed_units(drive: Drive) -> None:
+    """Raise :class:`InputError` naming ``gnss_ve`` (or ``gnss_e``) where the GNSS speed over
+    the drive's moving samples is not about the wheels' (median ratio outside
+    :data:`GNSS_SPEED_RANGE`): a Doppler speed in km/h (3.6), mph (2.24) or knots (1.94),
+    positions in km or feet.  The wheels are judged against ``ax`` first
+    (:func:`check_longitudinal`), so the GNSS is named.  Such a drive ran: urban_course with
+    its Doppler in km/h, fused with 48 % of it flagged; measured ratios on valid drives:
+    the simulated ones 0.98-1.02."""
+    for column, units in (
+        ("gnss_ve", "gnss_ve, gnss_vn in m/s (km/h reads 3.6, mph 2.24, knots 1.94)"),
+        ("gnss_e", "gnss_e, gnss_n in m (km reads 0.001, feet 3.28)"),
+    ):
+        found = gnss_speed_ratio(drive, column)
+        if found is None or GNSS_SPEED_RANGE[0] <= found[0] <= GNSS_SPEED_RANGE[1]:
+            continue
+        what = "Doppler speed" if column == "gnss_ve" else "speed between the fixes"
+        raise InputError(
+            drive.path,
+            f"moving (the first from this row), the GNSS {what} is {found[0]:.3g} x the wheels' "
+            f"speed: expected about 1 with {units}",
+            column=column,
+            row=found[1] + 1,
+        )

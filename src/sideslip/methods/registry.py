@@ -28,6 +28,7 @@ from sideslip.imu_timing import drive_on_gnss_clock
 from sideslip.settings import make_settings, settings_dict
 from sideslip.units_check import (
     MIN_CORRELATION,
+    check_gnss_speed_units,
     check_lateral_axes,
     check_lateral_units,
     check_longitudinal,
@@ -289,6 +290,7 @@ def run_method(method: str | Method, drive: Drive, vehicle: Vehicle, settings: A
     check_lateral_units(drive)
     check_tilt_rate_units(drive)
     check_longitudinal(drive)
+    check_gnss_speed_units(drive)
     check_lateral_axes(drive, "steer" in columns_used(method, drive))
     params = vehicle.missing(list(method.vehicle_params))
     if params:
