@@ -265,7 +265,11 @@ def tilt_excursion(drive: Drive, column: str) -> tuple[float, int] | None:
     if rows.size < 20:
         return None
     t, w = drive.t[rows], w[rows] - float(np.mean(w[rows]))
-    angle = np.concatenate(([0.0], np.cumsum(0.5 * (w[1:] + w[:-1]) * np.diff(t))))
+    # not across a gap or a jump of the clock (a logger's hour-long jump held a rate of
+    # 1e-3 rad/s over 3600 s): only steps of at most 1 s, or a few sample steps
+    dt = np.diff(t)
+    dt = np.where(dt <= max(1.0, 5.0 * sample_step(drive.t, drive[column])), dt, 0.0)
+    angle = np.concatenate(([0.0], np.cumsum(0.5 * (w[1:] + w[:-1]) * dt)))
     end = np.clip(np.searchsorted(t, t + TILT_WINDOW_S), 0, t.size - 1)
     turned = np.abs(angle[end] - angle)
     k = int(np.argmax(turned))
