@@ -123,6 +123,17 @@ def _revs() -> tuple[Drive, Vehicle]:
     return convert_revs(REVS), load_vehicle("revs_250lm")
 
 
+def _revs_at_20_hz() -> tuple[Drive, Vehicle]:
+    """The Revs lap with every fifth row kept (a 20 Hz logger sampling, not averaging); skips
+    where the real data is absent."""
+    if not REVS.exists():
+        pytest.skip(f"real data absent: {REVS} (../shared/data is not shipped with the repo)")
+    drive, vehicle = _revs()
+    every_fifth = slice(None, None, 5)
+    cols = {"t": drive.t[every_fifth], **{k: v[every_fifth] for k, v in drive.data.items()}}
+    return drive_from_columns(cols, dict(drive.meta)), vehicle
+
+
 @pytest.mark.realdata
 def test_revs_lap_without_gnss_beats_the_papers_factor_graph():
     """The real Ferrari 250 LM lap (beta to 5.5 deg, |a_y| to 16.6 m/s^2, no GNSS): the paper's
@@ -152,12 +163,7 @@ def test_revs_lap_logged_at_20_hz_takes_the_files_stiffness_not_the_noises():
     its zero-phase force low-pass takes half the single pass's time constant.
     Bounds: better than fg_batch on the same table (measured 0.41 deg against 0.57), >= 90 %
     inside 2 sigma (measured 0.97), and the params say why."""
-    if not REVS.exists():
-        pytest.skip(f"real data absent: {REVS} (../shared/data is not shipped with the repo)")
-    drive, vehicle = _revs()
-    every_fifth = slice(None, None, 5)
-    cols = {"t": drive.t[every_fifth], **{k: v[every_fifth] for k, v in drive.data.items()}}
-    logged = drive_from_columns(cols, dict(drive.meta))
+    logged, vehicle = _revs_at_20_hz()
     est = run_method("fused", logged, vehicle)
     rmse = metrics(logged, est.series)["beta_rmse_deg"]
     fg = metrics(logged, run_method("fg_batch", logged, vehicle).series)["beta_rmse_deg"]
@@ -221,12 +227,7 @@ def test_revs_lap_at_20_hz_with_a_file_twice_too_stiff_says_so_in_beta_std():
     and the difference between the file's and the bound's beta joins beta_std: 84 % inside
     2 sigma without it, 94 % with it (measured).  Bounds: >= 90 %, a spread above 0.1 deg,
     and the estimate no worse than the file's alone (0.95)."""
-    if not REVS.exists():
-        pytest.skip(f"real data absent: {REVS} (../shared/data is not shipped with the repo)")
-    drive, vehicle = _revs()
-    every_fifth = slice(None, None, 5)
-    cols = {"t": drive.t[every_fifth], **{k: v[every_fifth] for k, v in drive.data.items()}}
-    logged = drive_from_columns(cols, dict(drive.meta))
+    logged, vehicle = _revs_at_20_hz()
     stiff = vehicle.with_changes(cf=2.0 * vehicle.cf, cr=2.0 * vehicle.cr)
     est = run_method("fused", logged, stiff)
     assert est.params["rear_stiffness_scale_note"].startswith("not learned")
