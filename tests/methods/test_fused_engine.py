@@ -332,3 +332,30 @@ def test_a_rear_slip_past_full_sliding_against_a_small_force_maps_back_onto_the_
     x[IVY] = 2.5 * z_sl * 20.0
     axle[A_SHAPE] = 1.3
     assert math.isnan(eng._rear_slip_target(x, u, -0.3 * lim, axle, 0.0, dr))
+
+
+def test_a_stiffness_scale_past_its_bound_is_projected_back_with_its_correlated_states() -> None:
+    """Analytic case of the P^-1-weighted estimate projection: a rear scale at 0.3 (below
+    SCALE_MIN 0.5) correlated with v_y (covariance 0.02, scale variance 0.04) moves to 0.5,
+    and v_y by 0.02 / 0.04 x 0.2 = 0.1 m/s, as a measurement of the scale at the bound would
+    move them; an uncorrelated state stays, the covariance is kept.  A front scale of 2.6
+    goes to SCALE_MAX; scales inside the bounds do not move."""
+    from sideslip.models.fused_measurements import SCALE_MAX, SCALE_MIN
+    from sideslip.models.fused_process import ISF
+
+    x = np.zeros(NX_CORE)
+    x[IVX], x[IVY], x[ISR], x[ISF] = 30.0, 0.4, 0.3, 2.6
+    P = np.eye(NX_CORE) * 0.01
+    P[ISR, ISR], P[ISF, ISF] = 0.04, 0.09
+    P[IVY, ISR] = P[ISR, IVY] = 0.02
+    P0 = P.copy()
+    eng._project_scales(x, P)
+    assert x[ISR] == SCALE_MIN and x[ISF] == SCALE_MAX
+    assert abs(x[IVY] - (0.4 + 0.02 / 0.04 * (SCALE_MIN - 0.3))) < 1e-12
+    assert x[IVX] == 30.0
+    np.testing.assert_array_equal(P, P0)
+    inside = x.copy()
+    inside[ISR], inside[ISF] = 0.8, 1.7
+    moved = inside.copy()
+    eng._project_scales(moved, P)
+    np.testing.assert_array_equal(moved, inside)

@@ -889,6 +889,7 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     fix_t = t[g_rows[np.isfinite(gn["gnss_e"])]] if has_pos else t[:0]
     fix_rate = 1.0 / float(np.median(np.diff(fix_t))) if fix_t.size > 1 else 1.0
     cfg = _config(nz, k_phi, calibrate, has_vel, fix_rate)
+    cfg[eng.C_SCALE_PROJECT] = 1.0 if (nz.filter_project_scales and not smooth) else 0.0
     # the smoother's body velocity random walk is at least the accelerometer's own white noise
     # (on a 100 Hz log well below the prior; a 20 Hz log of a vibrating car folds its
     # vibration into the band: Revs lap sampled at 20 Hz, 0.84 m/s^2 per sample, 0.19

@@ -117,7 +117,8 @@ C_VCHECK_RAMP_TAU = 29  # s: how long after a bank change the check allows for c
 C_LOW_SPEED_SIGMA = 30  # m/s: the rear axle's sideways velocity below C_AXLE_MIN_SPEED (0: off)
 C_CG_SIGMA = 31  # m: the file's l_r uncertainty, in that relation
 C_SUSPECT_HOLD = 32  # 1: the tyres learn nothing while the Doppler check rejects a run of epochs
-N_CFG = 33
+C_SCALE_PROJECT = 33  # 1: a stiffness scale past its bounds is projected back onto them
+N_CFG = 34
 
 # the states whose variance is kept at every node (the outputs' sigmas, the beta_std terms and
 # mu's params); ``VAR_COLUMN[state]`` is its column in the node variances.  The full diagonal
@@ -336,6 +337,27 @@ def _track_road_roll(chk, dt, fy, cfg):
         return
     a = min(dt / cfg[C_VCHECK_RAMP_TAU], 1.0)
     chk[10] += a * (road - chk[10])
+
+
+@numba.njit(cache=True)
+def _project_scales(x, P):
+    """Move a stiffness scale that an update took past :data:`SCALE_MIN` / :data:`SCALE_MAX`
+    back onto the bound, and the states correlated with it as a measurement of the scale at
+    the bound would (estimate projection with the weight P^-1, Simon 2010, IET Control Theory
+    Appl. 4(8), sec. 2.3); the covariance is kept, so the scale stays free to move back.
+
+    The axle relations hold a scale at its bound (their Jacobian in it is 0 beyond), so a
+    scale left beyond it by an early update never learned again: the causal filter started
+    at 40 m/s on the Revs lap took the rear scale below 0.5 within its first second, where
+    v_y was still its prior's, and kept it there for the whole clip."""
+    for j in (ISR, ISF):
+        bound = SCALE_MIN if x[j] < SCALE_MIN else (SCALE_MAX if x[j] > SCALE_MAX else x[j])
+        if bound == x[j] or P[j, j] <= 0.0:
+            continue
+        step = (bound - x[j]) / P[j, j]
+        for i in range(x.size):
+            x[i] += P[i, j] * step
+        x[j] = bound
 
 
 @numba.njit(cache=True)
@@ -613,6 +635,8 @@ def forward_nodes(
                 nis[k, K_GNSS_POS] = d2 if not math.isfinite(nis[k, K_GNSS_POS]) else nis[k, K_GNSS_POS] + d2
                 counts[0 if ok else 1] += 1
             gi += 1
+        if cfg[C_SCALE_PROJECT] > 0.0:
+            _project_scales(x, P)
         for i in range(nx):  # floor the variances against round-off
             if P[i, i] < 1e-18:
                 P[i, i] = 1e-18

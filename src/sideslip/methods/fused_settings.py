@@ -87,6 +87,15 @@ class FusedSettings:
     # the bound stays (the lap at 100 Hz with cf, cr doubled: 0.92 deg on the file's
     # stiffness, 0.23 held at the bound)
     stiffness_fallback_max_rate_hz: float = 25.0
+    # the causal filter: a stiffness scale an update took past SCALE_MIN / SCALE_MAX is moved
+    # back onto the bound (with the states correlated with it; fused_engine._project_scales),
+    # so that it can learn again.  The Revs lap cut into 30 s clips, fused_filter: the clip
+    # from 225 s 1.50 -> 0.65 deg, from 450 s 1.59 -> 0.63 (the scale taken below 0.5 in the
+    # first second, while v_y was its prior's, and held there); every other clip unchanged.
+    # cr_limit_ramp seed 11 with a 5 s multipath burst and a 30 %-soft file, without the
+    # Doppler check's hold on the tyres: 3.93 deg (29 % inside 2 sigma) -> 1.55 (92 %).
+    # The smoother keeps the excursion: its fallback (above) reads it
+    filter_project_scales: bool = True
     mu_prior: float = 1.0  # dry asphalt
     mu_prior_sigma: float = 0.35
     # mu's prior mean from the drive's own understeer angle where the drive used at least 90 %
