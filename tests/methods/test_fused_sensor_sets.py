@@ -297,6 +297,41 @@ def test_without_gnss_the_roll_gyro_carries_the_bank_not_the_yaw_gyro_bias():
     assert metrics(drive, est.series)["beta_rmse_deg"] < 0.051
 
 
+def test_without_gnss_a_piece_of_stop_and_go_driving_takes_its_gyro_zero_from_the_steering():
+    """urban_course from 110 s for 20 s without GNSS: no standstill and no heading reference,
+    so the smoother's own gyro bias took up the lateral accelerometer's offset over the speed
+    (0.021 rad/s against the simulator's -0.005; beta RMSE 0.202 deg, inside its sigma).  The
+    steering relation (sideslip.calibrate.steer_yaw, speed 5-14 m/s) gives the zero to 0.002
+    +- 0.005 rad/s and is the bias state's prior: measured beta RMSE 0.022 deg and the bias
+    0.0012 off.  Bounds: beta below 0.08 (fg_batch on the same columns 0.049) and the bias
+    within 0.01 rad/s (half the offset the smoother took alone)."""
+    whole = _without_gnss(sim_drive("urban_course"))
+    rel = whole.t - whole.t[0]
+    keep = (rel >= 110.0) & (rel < 130.0)
+    piece = drive_from_columns({"t": whole.t[keep], **{k: v[keep] for k, v in whole.data.items()}}, dict(whole.meta))
+    vehicle = load_vehicle(piece.meta["vehicle"])
+    est = run_method("fused", piece, vehicle)
+    true_bias = piece.meta["truth_sensor"]["gyro_bias_mean"][2]
+    assert "steering" in est.params["assumed"]["gyro_bias_prior"]
+    assert abs(est.params["gyro_bias_rad_s"] - true_bias) < 0.01
+    assert metrics(piece, est.series)["beta_rmse_deg"] < 0.08
+    assert two_sigma_share(piece, est) >= 0.9
+
+
+def test_without_gnss_a_steering_zero_at_one_speed_is_not_taken_and_the_filter_never_takes_it():
+    """dlc_bank from 10 s without GNSS, at one speed (22 m/s): the steering's zero is 0.029
+    rad/s wide there (the steering sensor's offset over L / v), wider than the smoother's own
+    bias and than FusedSettings.steer_gyro_prior_max_sigma, so the prior stays the settings'
+    and says why.  The causal filter never reads the whole drive's steering."""
+    whole = _without_gnss(sim_drive("dlc_bank"))
+    rel = whole.t - whole.t[0]
+    keep = (rel >= 10.0) & (rel < 30.0)
+    piece = drive_from_columns({"t": whole.t[keep], **{k: v[keep] for k, v in whole.data.items()}}, dict(whole.meta))
+    vehicle = load_vehicle(piece.meta["vehicle"])
+    assert "wider than" in run_method("fused", piece, vehicle).params["assumed"]["gyro_bias_prior"]
+    assert "gyro_bias_prior" not in run_method("fused_filter", piece, vehicle).params["assumed"]
+
+
 def test_without_gnss_the_gyro_scale_is_held_and_urban_turns_stay_right():
     """Without a heading or speed reference the gyro and (smoother) wheel-speed scale factors
     are not identified (held at 1): on urban_course (578 s, low-speed 90 deg turns) free

@@ -155,6 +155,7 @@ from numpy.typing import NDArray
 
 from sideslip import gnss
 from sideslip.calibrate.friction import drive_friction
+from sideslip.calibrate.steer_yaw import steer_gyro_zero
 from sideslip.doppler_timing import antenna_geometry, choose_doppler_latency, doppler_fit
 from sideslip.drive import LONG_DRIVE_ROWS, Drive
 from sideslip.estimate import Estimate
@@ -507,6 +508,30 @@ def _initial_state(drive: Drive, vw: FloatArray, nx: int, nz: FusedSettings) -> 
     return x0, np.diag(sig**2)
 
 
+def _steer_gyro_prior(
+    drive: Drive, vehicle: Vehicle, x0: FloatArray, P0: FloatArray, notes: dict[str, str], max_sigma: float
+) -> None:
+    """The gyro-bias state's prior from the drive's steering relation
+    (:func:`sideslip.calibrate.steer_yaw.steer_gyro_zero`, FusedSettings.steer_gyro_prior)
+    where its 1-sigma is at most ``max_sigma`` (rad/s), in place; ``notes["gyro_bias_prior"]``
+    says what was taken or why not."""
+    zero = steer_gyro_zero(drive, vehicle)
+    if not zero.informed:
+        notes["gyro_bias_prior"] = f"0 +- {math.sqrt(P0[IBG, IBG]):g} rad/s (settings): {zero.note}"
+        return
+    if zero.sigma > max_sigma:
+        notes["gyro_bias_prior"] = (
+            f"0 +- {math.sqrt(P0[IBG, IBG]):g} rad/s (settings): the steering's zero {zero.value:.4f} +- "
+            f"{zero.sigma:.4f} rad/s is wider than FusedSettings.steer_gyro_prior_max_sigma"
+        )
+        return
+    x0[IBG] = zero.value
+    P0[IBG, IBG] = min(zero.sigma, math.sqrt(P0[IBG, IBG])) ** 2
+    notes["gyro_bias_prior"] = (
+        f"{zero.value:.4f} +- {math.sqrt(P0[IBG, IBG]):.4f} rad/s from the drive's steering ({zero.source})"
+    )
+
+
 def _process_psd(nx: int, nz: FusedSettings) -> FloatArray:
     q = np.zeros(nx)
     q[IBG] = nz.gyro_bias_psd**2
@@ -846,6 +871,8 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
         else:
             why = "the causal filter keeps the settings' mu (FusedSettings.identify_mu_causal)"
         notes["mu_prior"] = f"{nz.mu_prior:g} +- {nz.mu_prior_sigma:g} (settings): {why}"
+    if smooth and nz.steer_gyro_prior and not (has_pos or has_vel):
+        _steer_gyro_prior(drive, vehicle, x0, P0, notes, nz.steer_gyro_prior_max_sigma)
     q = _process_psd(nx, nz)
     if not (has_pos or has_vel):
         # the gyro's scale factor is identified against a heading reference, the GNSS course

@@ -114,6 +114,21 @@ class FusedSettings:
     # rear's own mu.  benchmarks/results/friction.md (b), (e)
     identify_mu: bool = False
     identify_mu_causal: bool = False  # the causal filter too (with identify_mu)
+    # without GNSS the smoother's gyro-bias prior is the drive's own steering relation
+    # (sideslip.calibrate.steer_yaw: its mean and 1-sigma in place of 0 +- 0.1 rad/s) where
+    # that 1-sigma is at most steer_gyro_prior_max_sigma.  Without a heading reference a gyro
+    # bias and a lateral offset (bank, accelerometer bias) over the speed read alike in the
+    # kinematic relation; the steering tells them apart where the speed varies.  At one speed
+    # the steering's zero is no narrower than v sigma(delta_0) / L (0.03 rad/s at 22 m/s),
+    # wider than what the smoother gets on its own (1-sigma 0.018-0.022 rad/s), and carries the
+    # steering sensor's offset whole: taken anyway it cost banked_turn 0.007 -> 0.020 deg (seeds
+    # 0-3 alike), cr_limit_ramp 0.287 -> 0.331, one Revs clip 0.43 -> 0.68; hence the cap.  With
+    # it, 20 s pieces without GNSS: urban_course mean 0.125 -> 0.079 deg, suburban_outages
+    # 0.080 -> 0.061; urban_highway whole 0.016 -> 0.008; no whole drive worse.  The fit reads
+    # the whole drive, so the causal filter does not take it.
+    # benchmarks/results/gyro_zero_steer.md
+    steer_gyro_prior: bool = True
+    steer_gyro_prior_max_sigma: float = 0.015  # rad/s
     mu_psd: float = 0.02  # 1/sqrt(s): patches of another surface
     latency_prior_sigma_s: float = 0.1  # s: receivers stamp fixes 0-200 ms late
     latency_psd: float = 1e-5  # s/sqrt(s)
