@@ -318,18 +318,36 @@ def test_without_gnss_a_piece_of_stop_and_go_driving_takes_its_gyro_zero_from_th
     assert two_sigma_share(piece, est) >= 0.9
 
 
-def test_without_gnss_a_steering_zero_at_one_speed_is_not_taken_and_the_filter_never_takes_it():
-    """dlc_bank from 10 s without GNSS, at one speed (22 m/s): the steering's zero is 0.029
-    rad/s wide there (the steering sensor's offset over L / v), wider than the smoother's own
-    bias and than FusedSettings.steer_gyro_prior_max_sigma, so the prior stays the settings'
-    and says why.  The causal filter never reads the whole drive's steering."""
+def test_without_gnss_a_drive_starting_on_a_bank_is_not_confidently_wrong():
+    """dlc_bank from 10 s without GNSS, at one speed (22 m/s), starting on its 16 deg bank: the
+    smoother reads the bank's 2.7 m/s^2 as a gyro bias of -0.11 rad/s (no level reference in
+    the piece; the offset's prior is 0.5 m/s^2), beta 0.47 deg off with 10 % of its errors
+    inside 2 sigma.  The steering's zero, -0.009 +- 0.029 rad/s (the steering sensor's offset
+    over L / v at one speed), is too wide to be the prior (FusedSettings.
+    steer_gyro_prior_max_sigma; the prior stays the settings' and says why), but disagrees
+    with the smoother's bias beyond both sigmas, and beta_std carries that disagreement as
+    l_r db / v: measured 100 % inside 2 sigma.  Bound: 90 %, with the disagreement's part
+    above 0.2 deg (l_r 0.1 / 22 rad is 0.37 deg).  The causal filter never reads the whole
+    drive's steering."""
     whole = _without_gnss(sim_drive("dlc_bank"))
     rel = whole.t - whole.t[0]
     keep = (rel >= 10.0) & (rel < 30.0)
     piece = drive_from_columns({"t": whole.t[keep], **{k: v[keep] for k, v in whole.data.items()}}, dict(whole.meta))
     vehicle = load_vehicle(piece.meta["vehicle"])
-    assert "wider than" in run_method("fused", piece, vehicle).params["assumed"]["gyro_bias_prior"]
+    est = run_method("fused", piece, vehicle)
+    assert "wider than" in est.params["assumed"]["gyro_bias_prior"]
+    assert est.params["beta_std_gyro_zero_disagreement_deg"] > 0.2
+    assert two_sigma_share(piece, est) >= 0.9
     assert "gyro_bias_prior" not in run_method("fused_filter", piece, vehicle).params["assumed"]
+
+
+def test_without_gnss_cues_that_agree_leave_beta_std_alone():
+    """banked_turn without GNSS (level start, the roll gyro carries the bank): the smoother's
+    bias and the steering's zero agree within their sigmas, so no disagreement term."""
+    drive = _without_gnss(sim_drive("banked_turn"))
+    est = run_method("fused", drive, load_vehicle(drive.meta["vehicle"]))
+    assert "gyro_bias_steering_rad_s" in est.params
+    assert "beta_std_gyro_zero_disagreement_deg" not in est.params
 
 
 def test_without_gnss_the_gyro_scale_is_held_and_urban_turns_stay_right():

@@ -118,7 +118,11 @@ which the random walk, white, does not.  Where five curves or more decide it, th
 itself comes out of the axle forces and the bank (``identify_accel_offset``,
 :mod:`sideslip.methods.fused_accel_offset`: seed 000's heading closure in curves, which
 tells a reading's offset from a road's crossfall through the yaw gyro's tilt), and its
-posterior sigma replaces the prior's in ``beta_std``.  With Doppler and fixes the smoother also checks the
+posterior sigma replaces the prior's in ``beta_std``.  Without GNSS the smoother's gyro-bias
+prior is the drive's steering relation (``steer_gyro_prior``,
+:mod:`sideslip.calibrate.steer_yaw`) where that is narrow enough; where it is not, and the
+smoother's bias disagrees with it beyond both sigmas, ``beta_std`` carries the disagreement
+as the slip ``l_r db / v`` it makes.  With Doppler and fixes the smoother also checks the
 file's antenna position (``check_doppler_lever``, :mod:`sideslip.methods.fused_lever`): an
 antenna ``dl_x`` ahead of where the file says adds ``r dl_x`` to the Doppler's lateral
 velocity, which reads as slip; a pass without the tyres finds ``dl_x``, and the antenna is
@@ -155,6 +159,7 @@ from numpy.typing import NDArray
 
 from sideslip import gnss
 from sideslip.calibrate.friction import drive_friction
+from sideslip.calibrate.result import Fitted
 from sideslip.calibrate.steer_yaw import steer_gyro_zero
 from sideslip.doppler_timing import antenna_geometry, choose_doppler_latency, doppler_fit
 from sideslip.drive import LONG_DRIVE_ROWS, Drive
@@ -509,13 +514,12 @@ def _initial_state(drive: Drive, vw: FloatArray, nx: int, nz: FusedSettings) -> 
 
 
 def _steer_gyro_prior(
-    drive: Drive, vehicle: Vehicle, x0: FloatArray, P0: FloatArray, notes: dict[str, str], max_sigma: float
+    zero: Fitted, x0: FloatArray, P0: FloatArray, notes: dict[str, str], max_sigma: float
 ) -> None:
-    """The gyro-bias state's prior from the drive's steering relation
+    """The gyro-bias state's prior from the drive's steering relation ``zero``
     (:func:`sideslip.calibrate.steer_yaw.steer_gyro_zero`, FusedSettings.steer_gyro_prior)
     where its 1-sigma is at most ``max_sigma`` (rad/s), in place; ``notes["gyro_bias_prior"]``
     says what was taken or why not."""
-    zero = steer_gyro_zero(drive, vehicle)
     if not zero.informed:
         notes["gyro_bias_prior"] = f"0 +- {math.sqrt(P0[IBG, IBG]):g} rad/s (settings): {zero.note}"
         return
@@ -530,6 +534,30 @@ def _steer_gyro_prior(
     notes["gyro_bias_prior"] = (
         f"{zero.value:.4f} +- {math.sqrt(P0[IBG, IBG]):.4f} rad/s from the drive's steering ({zero.source})"
     )
+
+
+def _gyro_zero_disagreement(
+    series: dict[str, FloatArray], params: dict[str, Any], zero: Fitted, lr: float, min_speed: float
+) -> None:
+    """Widen ``beta_std`` where the smoother's gyro bias and the steering's zero ``zero``
+    disagree beyond both 1-sigmas (a consistency test between cues, issue 15 point 3).
+
+    Without GNSS the smoother reads the bias from the kinematic relation, where a lateral
+    offset over the speed (a bank the drive starts on, an accelerometer bias) reads the same;
+    the steering tells them apart but at one speed only to v sigma(delta_0) / L, too wide to be
+    the prior (FusedSettings.steer_gyro_prior_max_sigma).  A bias error db enters the rear
+    slip as l_r db / v; the disagreement beyond the two sigmas (as the calibration widens a
+    fit by its halves' spread, :func:`sideslip.calibrate.fit.halves_sigma`) is taken as that
+    db.  dlc_bank from 10 s (16 deg bank at the start, no GNSS): smoother -0.11 rad/s, steering
+    -0.009 +- 0.029."""
+    b, b_sigma = float(params["gyro_bias_rad_s"]), float(params["gyro_bias_rad_s_sigma"])
+    excess = (b - zero.value) ** 2 - b_sigma**2 - zero.sigma**2
+    params["gyro_bias_steering_rad_s"] = [zero.value, zero.sigma]
+    if excess <= 0.0:
+        return
+    slip = lr * math.sqrt(excess) / np.maximum(np.abs(series["vx"]), min_speed)
+    series["beta_std"] = np.hypot(series["beta_std"], slip)
+    params["beta_std_gyro_zero_disagreement_deg"] = float(np.degrees(np.sqrt(np.mean(slip**2))))
 
 
 def _process_psd(nx: int, nz: FusedSettings) -> FloatArray:
@@ -871,8 +899,10 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
         else:
             why = "the causal filter keeps the settings' mu (FusedSettings.identify_mu_causal)"
         notes["mu_prior"] = f"{nz.mu_prior:g} +- {nz.mu_prior_sigma:g} (settings): {why}"
+    steer_zero = None
     if smooth and nz.steer_gyro_prior and not (has_pos or has_vel):
-        _steer_gyro_prior(drive, vehicle, x0, P0, notes, nz.steer_gyro_prior_max_sigma)
+        steer_zero = steer_gyro_zero(drive, vehicle)
+        _steer_gyro_prior(steer_zero, x0, P0, notes, nz.steer_gyro_prior_max_sigma)
     q = _process_psd(nx, nz)
     if not (has_pos or has_vel):
         # the gyro's scale factor is identified against a heading reference, the GNSS course
@@ -1147,6 +1177,8 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
         # race lap: 0.311 deg with 93.7 % inside 2 sigma without this term, 99.0 % with it)
         timing_s = math.hypot(doppler_latency[1], 0.5 * drive.dt_median)
         series["beta_std"] = np.hypot(series["beta_std"], np.abs(series["r"]) * timing_s)
+    if steer_zero is not None and steer_zero.informed:
+        _gyro_zero_disagreement(series, params, steer_zero, vehicle.lr, nz.axle_min_speed)
     if nz.accel_offset_sigma > 0.0 and not tyres_carry:
         # an accelerometer offset the drive cannot tell from tyre force (nor, with GNSS,
         # from bank; a mounting roll is one too: g times its angle) is a rear-axle force
