@@ -293,3 +293,37 @@ def test_without_gnss_gaps_leave_the_tyres_in_charge(method, gaps, bound_deg) ->
     est = run_method(method, drive, vehicle)
     assert metrics(drive, est.series)["beta_rmse_deg"] < bound_deg
     assert two_sigma_share(drive, est) >= 0.9
+
+
+def imu_holes(drive, seconds: float = 0.5, count: int = 8, seed: int = 1):
+    """``drive`` with ``count`` holes of ``seconds`` in each of a_x, a_y and w_z, at random
+    places (benchmarks/input_faults.py's "IMU holes")."""
+    rng = np.random.default_rng(seed)
+    width = round(seconds / drive.dt_median)
+    data = dict(drive.data)
+    for name in ("ax", "ay", "wz"):
+        col = np.array(data[name], dtype=float)
+        for start in rng.integers(0, col.size - width, count):
+            col[start : start + width] = np.nan
+        data[name] = col
+    return replace(drive, data=data)
+
+
+@pytest.mark.parametrize(("method", "bound_deg"), [("fused", 0.6), ("fused_filter", 1.2)])
+def test_holes_in_the_lateral_imu_at_the_limit_are_filled_through_the_kinematics(method, bound_deg) -> None:
+    """cr_limit_slalom (CommonRoad multi-body car, mu 0.6, beta to 5 deg) without GNSS, with
+    0.5 s holes in a_x, a_y and w_z.  In the slalom a_y and w_z reverse within a hole while
+    v_y's rate a_y - v w_z stays small, so a_y is filled as that residual (held or
+    interpolated) plus v times the yaw rate, and the smoother's w_z as (a_y - the residual) /
+    v.  Measured beta RMSE (deg): fused_filter 11.98 -> 0.65 (v_y had run to -9.5 m/s in one
+    a_y hole with a_y itself held), fused 1.66 -> 0.33; 0.34 / 0.17 without holes.  Bounds:
+    about twice the measured values, far below before; 90 % inside 2 sigma."""
+    from sideslip.simulate import SensorConfig, simulate
+    from sideslip.simulate.run import _lookup
+
+    config = SensorConfig().with_overrides(_lookup("cr_limit_slalom").sensor_overrides)
+    whole = without_gnss(simulate("cr_limit_slalom", seed=0, config=config))
+    drive = imu_holes(whole)
+    est = run_method(method, drive, load_vehicle(whole.meta["vehicle"]))
+    assert metrics(drive, est.series)["beta_rmse_deg"] < bound_deg
+    assert two_sigma_share(drive, est) >= 0.9
