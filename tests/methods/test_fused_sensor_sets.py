@@ -297,6 +297,15 @@ def test_without_gnss_the_roll_gyro_carries_the_bank_not_the_yaw_gyro_bias():
     assert metrics(drive, est.series)["beta_rmse_deg"] < 0.051
 
 
+def _piece_without_gnss(scenario: str, start_s: float, length_s: float) -> Drive:
+    """``length_s`` of the scenario's drive from ``start_s``, its GNSS columns removed: a clip
+    that starts at speed, with no standstill and every state at its prior."""
+    whole = _without_gnss(sim_drive(scenario))
+    rel = whole.t - whole.t[0]
+    keep = (rel >= start_s) & (rel < start_s + length_s)
+    return drive_from_columns({"t": whole.t[keep], **{k: v[keep] for k, v in whole.data.items()}}, dict(whole.meta))
+
+
 def test_without_gnss_a_piece_of_stop_and_go_driving_takes_its_gyro_zero_from_the_steering():
     """urban_course from 110 s for 20 s without GNSS: no standstill and no heading reference,
     so the smoother's own gyro bias took up the lateral accelerometer's offset over the speed
@@ -305,10 +314,7 @@ def test_without_gnss_a_piece_of_stop_and_go_driving_takes_its_gyro_zero_from_th
     +- 0.005 rad/s and is the bias state's prior: measured beta RMSE 0.022 deg and the bias
     0.0012 off.  Bounds: beta below 0.08 (fg_batch on the same columns 0.049) and the bias
     within 0.01 rad/s (half the offset the smoother took alone)."""
-    whole = _without_gnss(sim_drive("urban_course"))
-    rel = whole.t - whole.t[0]
-    keep = (rel >= 110.0) & (rel < 130.0)
-    piece = drive_from_columns({"t": whole.t[keep], **{k: v[keep] for k, v in whole.data.items()}}, dict(whole.meta))
+    piece = _piece_without_gnss("urban_course", 110.0, 20.0)
     vehicle = load_vehicle(piece.meta["vehicle"])
     est = run_method("fused", piece, vehicle)
     true_bias = piece.meta["truth_sensor"]["gyro_bias_mean"][2]
@@ -329,10 +335,7 @@ def test_without_gnss_a_drive_starting_on_a_bank_is_not_confidently_wrong():
     l_r db / v: measured 100 % inside 2 sigma.  Bound: 90 %, with the disagreement's part
     above 0.2 deg (l_r 0.1 / 22 rad is 0.37 deg).  The causal filter never reads the whole
     drive's steering."""
-    whole = _without_gnss(sim_drive("dlc_bank"))
-    rel = whole.t - whole.t[0]
-    keep = (rel >= 10.0) & (rel < 30.0)
-    piece = drive_from_columns({"t": whole.t[keep], **{k: v[keep] for k, v in whole.data.items()}}, dict(whole.meta))
+    piece = _piece_without_gnss("dlc_bank", 10.0, 20.0)
     vehicle = load_vehicle(piece.meta["vehicle"])
     est = run_method("fused", piece, vehicle)
     assert "wider than" in est.params["assumed"]["gyro_bias_prior"]
