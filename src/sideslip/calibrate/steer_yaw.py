@@ -28,8 +28,8 @@ is repeated with it scaled and the move added to the 1-sigma); the 1-sigma is cl
 and widened by the disagreement of the drive's halves (:mod:`sideslip.calibrate.fit`).
 
 Used by ``fused`` as the gyro-bias state's prior where the drive has no GNSS (its heading
-relation would tell the bias).  The fit is a look at the whole drive, so the causal filter
-does not take it.
+relation would tell the bias); the fit is a look at the whole drive, which the causal filter
+takes as a calibration of the gyro only with ``whole_drive_calibration``.
 """
 
 from __future__ import annotations

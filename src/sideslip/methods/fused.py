@@ -118,18 +118,19 @@ which the random walk, white, does not.  Where five curves or more decide it, th
 itself comes out of the axle forces and the bank (``identify_accel_offset``,
 :mod:`sideslip.methods.fused_accel_offset`: seed 000's heading closure in curves, which
 tells a reading's offset from a road's crossfall through the yaw gyro's tilt), and its
-posterior sigma replaces the prior's in ``beta_std``.  Without GNSS the smoother's gyro-bias
-prior is the drive's steering relation (``steer_gyro_prior``,
-:mod:`sideslip.calibrate.steer_yaw`) where that is narrow enough; where it is not, and the
-smoother's bias disagrees with it beyond both sigmas, ``beta_std`` carries the disagreement
-as the slip ``l_r db / v`` it makes.  With Doppler and fixes the smoother also checks the
-file's antenna position (``check_doppler_lever``, :mod:`sideslip.methods.fused_lever`): an
-antenna ``dl_x`` ahead of where the file says adds ``r dl_x`` to the Doppler's lateral
-velocity, which reads as slip; a pass without the tyres finds ``dl_x``, and the antenna is
-moved only where that pass puts it beyond ``doppler_lever_z`` sigmas (less the part the node
-inputs' half-row timing accounts for, where they have one) and the filter with the tyres predicts the Doppler
-better with it moved (``params["assumed"]["gnss_lever_x"]``).  The causal filter, with
-``whole_drive_calibration``, runs the smoother first and takes the antenna its check found.
+posterior sigma replaces the prior's in ``beta_std``.  Without GNSS the gyro-bias prior is the
+drive's steering relation (``steer_gyro_prior``, :mod:`sideslip.calibrate.steer_yaw`; the
+causal filter's with ``whole_drive_calibration``) where that is narrow enough; where it is
+not, and the smoother's bias disagrees with it beyond both sigmas, the smoother's ``beta_std``
+carries the disagreement as the slip ``l_r db / v`` it makes.  With Doppler and fixes the
+smoother also checks the file's antenna position (``check_doppler_lever``,
+:mod:`sideslip.methods.fused_lever`): an antenna ``dl_x`` ahead of where the file says adds
+``r dl_x`` to the Doppler's lateral velocity, which reads as slip; a pass without the tyres
+finds ``dl_x``, and the antenna is moved only where that pass puts it beyond
+``doppler_lever_z`` sigmas (less the part the node inputs' half-row timing accounts for, where
+they have one) and the filter with the tyres predicts the Doppler better with it moved
+(``params["assumed"]["gnss_lever_x"]``).  The causal filter, with ``whole_drive_calibration``,
+runs the smoother first and takes the antenna its check found.
 
 Holes in the IMU inputs and pauses of the logger (rows missing; :mod:`sideslip.methods.input_gaps`):
 the smoother interpolates across a hole, the causal filter holds the last sample, a pause's
@@ -947,10 +948,13 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
         else:
             why = "the causal filter keeps the settings' mu (FusedSettings.identify_mu_causal)"
         notes["mu_prior"] = f"{nz.mu_prior:g} +- {nz.mu_prior_sigma:g} (settings): {why}"
-    steer_zero = None
-    if smooth and nz.steer_gyro_prior and not (has_pos or has_vel):
-        steer_zero = steer_gyro_zero(drive, vehicle)
-        _steer_gyro_prior(steer_zero, x0, P0, notes, nz.steer_gyro_prior_max_sigma)
+    steer_zero = None  # the steering's gyro zero, for beta_std's disagreement term (smoother)
+    if (smooth or nz.whole_drive_calibration) and nz.steer_gyro_prior and not (has_pos or has_vel):
+        # a calibration of the gyro read from the whole drive, which the causal filter takes
+        # as it takes the roll gyro's bias (FusedSettings.whole_drive_calibration)
+        zero = steer_gyro_zero(drive, vehicle)
+        _steer_gyro_prior(zero, x0, P0, notes, nz.steer_gyro_prior_max_sigma)
+        steer_zero = zero if smooth else None
     q = _process_psd(nx, nz)
     if not (has_pos or has_vel):
         # the gyro's scale factor is identified against a heading reference, the GNSS course
