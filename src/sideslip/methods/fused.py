@@ -540,6 +540,24 @@ def _initial_state(drive: Drive, vw: FloatArray, nx: int, nz: FusedSettings) -> 
     return x0, np.diag(sig**2)
 
 
+def _filled_inputs(
+    drive: Drive, smooth: bool, v_held: FloatArray, min_speed: float
+) -> dict[str, FillResult]:
+    """The IMU inputs with their gaps filled (:func:`_imu`, :func:`_yaw_rate_input`,
+    :func:`_lateral_fill`) and ``"lat"``, the lateral kinematic residual a_y - v w_z with its
+    gaps (v_y's input error in a gap: the fills of a_y and w_z err together,
+    sideslip.models.fused_process.U_QLAT); one function for the node pass and a long drive's
+    rebuilt rows, so both read the same bits."""
+    filled = {c: _imu(drive, c, smooth) for c in ("wx", "wy", "ax", "ay")}
+    filled["wz"] = _yaw_rate_input(drive, smooth, v_held, min_speed)
+    if filled["ay"].sigma.any() or filled["wz"].sigma.any():
+        filled["lat"] = fill_input(drive.t, drive["ay"] - v_held * drive["wz"], interpolate=smooth)
+        filled["ay"] = _lateral_fill(drive["ay"], drive["wz"], filled["ay"], filled["lat"], v_held)
+    else:  # no gap in either: none in their difference
+        filled["lat"] = filled["ay"]
+    return filled
+
+
 def _lateral_fill(
     ay_raw: FloatArray, wz_raw: FloatArray, ay: FillResult, lat: FillResult, v: FloatArray
 ) -> FillResult:
@@ -717,16 +735,8 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     # only is taken as driving forwards (GNSS then disagrees, and the Huber weights limit harm)
     vw = np.full(n, np.nan) if raw is None else raw
     v_held = hold(vw, t)[0] if raw is not None else np.zeros(n)
-    filled = {c: _imu(drive, c, smooth) for c in ("wx", "ax", "ay")}
-    filled["wz"] = _yaw_rate_input(drive, smooth, v_held, nz.axle_min_speed)
-    wz, wx, wy = filled["wz"].values, filled["wx"].values, _imu(drive, "wy", smooth).values
-    # the lateral kinematic residual a_y - v w_z with its gaps (v_y's input error in a gap:
-    # the fills of a_y and w_z err together, sideslip.models.fused_process.U_QLAT)
-    if filled["ay"].sigma.any() or filled["wz"].sigma.any():
-        filled["lat"] = fill_input(t, drive["ay"] - v_held * drive["wz"], interpolate=smooth)
-        filled["ay"] = _lateral_fill(drive["ay"], drive["wz"], filled["ay"], filled["lat"], v_held)
-    else:  # no gap in either: none in their difference
-        filled["lat"] = filled["ay"]
+    filled = _filled_inputs(drive, smooth, v_held, nz.axle_min_speed)
+    wz, wx, wy = filled["wz"].values, filled["wx"].values, filled["wy"].values
     ax, ay = _accel_at_cg(
         drive, vehicle, wx, wy, wz, not smooth, filled["ax"].values, filled["ay"].values
     )
@@ -1160,12 +1170,12 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     if rebuild:
         speed_rows = speed_raw(drive)
         v_rows = hold(speed_rows, t)[0] if speed_rows is not None else np.zeros(n)
-        wz = _yaw_rate_input(drive, smooth, v_rows, nz.axle_min_speed).values
+        again = _filled_inputs(drive, smooth, v_rows, nz.axle_min_speed)
         del speed_rows, v_rows
-        wy = _imu(drive, "wy", smooth).values
-        wx_row = _imu(drive, "wx", smooth).values
-        ax_row, ay_row = (_imu(drive, c, smooth).values for c in ("ax", "ay"))
+        wz, wy, wx_row = again["wz"].values, again["wy"].values, again["wx"].values
+        ax_row, ay_row = again["ax"].values, again["ay"].values
         ax, ay = _accel_at_cg(drive, vehicle, wx_row, wy, wz, not smooth, ax_row, ay_row)
+        del again
         fy_lp = lp(t, (ay - offset_y.value) * suspension_factor(k_phi), tau_f)  # as above
         if smooth:
             del ax, ay
