@@ -149,6 +149,18 @@ def window_ids(t: FloatArray, usable: NDArray[np.bool_], window_s: float, max_ga
     return ids
 
 
+def window_means(window: NDArray[np.intp], columns: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Per-window means of ``columns`` (rows, k) and the windows' row counts."""
+    used = window >= 0
+    ids = window[used]
+    n_win = int(ids.max()) + 1 if ids.size else 0
+    count = np.bincount(ids, minlength=n_win).astype(float)
+    means = np.column_stack(
+        [np.bincount(ids, weights=columns[used, j], minlength=n_win) for j in range(columns.shape[1])]
+    )
+    return means / np.maximum(count, 1.0)[:, None], count
+
+
 def project_windows(window: IntArray, t: FloatArray, columns: FloatArray, slope: bool = True) -> FloatArray:
     """Remove per-window offset (and slope in t) from every column of ``columns`` (n, k).
 

@@ -39,10 +39,9 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
-from sideslip.calibrate.fit import clusters_of, window_ids
+from sideslip.calibrate.fit import clusters_of, window_ids, window_means
 from sideslip.calibrate.prepare import MAX_GAP_S
 from sideslip.calibrate.result import Fitted, left_alone
-from sideslip.calibrate.wheel_yaw import _window_means
 from sideslip.drive import Drive
 from sideslip.signals import interpolate, speed_raw
 from sideslip.typical import understeer_gradient
@@ -153,7 +152,7 @@ def steer_gyro_zero(drive: Drive, vehicle: Vehicle) -> Fitted:
         [t, np.nan_to_num(wz) * safe, np.nan_to_num(speed * delta) * safe, np.nan_to_num(speed * ay) * safe,
          np.nan_to_num(speed) * safe, tc, tc * tc, d0, tc * d0]
     )  # fmt: skip
-    means, count = _window_means(window, columns)
+    means, count = window_means(window, columns)
     full = count >= max(3.0, 0.5 * float(np.median(count))) if count.size else count.astype(bool)
     # the steering's rate over each window (least-squares slope): the yaw rate lags a moving
     # steer by the yaw response's time constant, which the steady-state relation leaves out

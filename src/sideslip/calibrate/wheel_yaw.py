@@ -32,7 +32,7 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
-from sideslip.calibrate.fit import clusters_of, fit_robust, halves_sigma, informed, window_ids
+from sideslip.calibrate.fit import clusters_of, fit_robust, halves_sigma, informed, window_ids, window_means
 from sideslip.calibrate.prepare import MAX_GAP_S
 from sideslip.calibrate.result import Fitted, left_alone
 from sideslip.drive import Drive
@@ -52,18 +52,6 @@ RADIUS_MISMATCH_PRIOR = 0.005  # prior 1-sigma of the rear wheels' rolling-radiu
 GYRO_BIAS_PRIOR = 0.02  # rad/s: prior 1-sigma of the gyro bias (~1 deg/s), as the course fit
 INFORMED_SHARE = 0.25  # told when the fit shrinks the bias's 1-sigma to this share of its prior
 NAME, UNIT = "gyro_bias_rad_s", "rad/s"
-
-
-def _window_means(window: NDArray[np.intp], columns: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """Per-window means of ``columns`` (rows, k) and the windows' row counts."""
-    used = window >= 0
-    ids = window[used]
-    n_win = int(ids.max()) + 1 if ids.size else 0
-    count = np.bincount(ids, minlength=n_win).astype(float)
-    means = np.column_stack(
-        [np.bincount(ids, weights=columns[used, j], minlength=n_win) for j in range(columns.shape[1])]
-    )
-    return means / np.maximum(count, 1.0)[:, None], count
 
 
 def wheel_gyro_zero(drive: Drive, track_rear: float = math.nan) -> Fitted:
@@ -87,7 +75,7 @@ def wheel_gyro_zero(drive: Drive, track_rear: float = math.nan) -> Fitted:
         for n in ("ax", "ay")
     ]
     columns = np.column_stack([t, wz, v_rr - v_rl, speed, *accel])
-    means, count = _window_means(window, columns)
+    means, count = window_means(window, columns)
     full = count >= max(3.0, 0.5 * float(np.median(count))) if count.size else count.astype(bool)
     full &= (np.abs(means[:, 4]) < AX_MAX) & (np.abs(means[:, 5]) < AY_MAX)
     if int(full.sum()) < MIN_WINDOWS:
