@@ -55,6 +55,7 @@ from sideslip.models.fused_measurements import (
     wheel_speed,
 )
 from sideslip.models.fused_process import (
+    IBG,
     ICX,
     ICY,
     IE,
@@ -120,10 +121,10 @@ C_SUSPECT_HOLD = 32  # 1: the tyres learn nothing while the Doppler check reject
 C_SCALE_PROJECT = 33  # 1: a stiffness scale past its bounds is projected back onto them
 N_CFG = 34
 
-# the states whose variance is kept at every node (the outputs' sigmas, the beta_std terms and
-# mu's params); ``VAR_COLUMN[state]`` is its column in the node variances.  The full diagonal
-# is returned for the last node only.
-VAR_STATES = np.array([IE, IN, IPSI, IVX, IVY, ISR, IMU], dtype=np.int64)
+# the states whose variance is kept at every node (the outputs' sigmas, the beta_std terms,
+# mu's params, the gyro bias's test against the steering's zero); ``VAR_COLUMN[state]`` is
+# its column in the node variances.  The full diagonal is returned for the last node only.
+VAR_STATES = np.array([IE, IN, IPSI, IVX, IVY, ISR, IMU, IBG], dtype=np.int64)
 VAR_COLUMN = {int(state): m for m, state in enumerate(VAR_STATES)}
 
 # innovation channels recorded per node (NIS, NaN where none)
