@@ -5,7 +5,9 @@ Every scenario (seed 0) with its own receiver and without GNSS, clean and with o
 time: eight 0.5 s holes in the yaw gyro; eight 0.5 s holes in each of a_x, a_y and w_z (at
 other places); three 2 s pauses of the logger (rows missing, the time stamps jump); every
 GNSS epoch 200 ms late (``gnss_latency_s``, as from a logger that stamps messages on
-arrival); the IMU's samples 50 ms late against the rest of the table.  Right vehicle file;
+arrival); the IMU's samples 50 ms late against the rest of the table; no ``ax`` column at
+all (a yaw-rate / lateral sensor cluster: ``fused`` reads the speed's rate for it).  Right
+vehicle file;
 beta RMSE in degrees on rows faster than 5 m/s, the share of beta errors inside 2 beta_std
 in brackets.  The inputs' gaps are handled by ``sideslip.methods.input_gaps``, the late
 Doppler by ``sideslip.doppler_timing``, the late IMU by ``sideslip.imu_timing`` (where the
@@ -78,6 +80,7 @@ FAULTS: dict[str, Callable[[Drive], Drive]] = {
     "IMU holes": lambda d: _holes(d, ("ax", "ay", "wz")),
     "logger pauses": _pauses,
     "IMU 50 ms late": _imu_late,
+    "no ax column": lambda d: replace(d, data={k: v for k, v in d.data.items() if k != "ax"}),
 }
 
 

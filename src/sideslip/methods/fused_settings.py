@@ -381,6 +381,15 @@ class FusedSettings:
     # moderate utilisation fits all three truths (the simulator's, CommonRoad's, the Revs
     # car's) better, the brush fits CommonRoad's limit better: the brush stays the default
     axle_curve_shape: float = 0.0
+    # a drive without an ax column: the speed's rate low-passed with this time constant (s)
+    # is the longitudinal input (fused._speed_rate; the process model then drops its r v_y
+    # term, fused_engine.C_AX_SPEED_RATE).  Measured 0.05 / 0.1 / 0.2 s (beta RMSE deg,
+    # fused / fused_filter, ax removed): Revs lap 0.246 / 0.450, 0.246 / 0.453, 0.246 / 0.458
+    # (with its ax 0.245 / 0.378; with the input 0 as before 0.415 / 23.4); race lap with
+    # Doppler 0.073 / 0.188, 0.076 / 0.189, 0.093 / 0.289; without GNSS 0.084 / 0.287, 0.083 /
+    # 0.282, 0.083 / 0.286; urban_course without GNSS 0.061 / 0.065, 0.060 / 0.052, 0.060 /
+    # 0.066.  0.1 s is five samples of a 50 Hz wheel speed
+    ax_from_speed_tau_s: float = 0.1
     # GNSS Doppler against the inertial propagation (fused_engine._doppler_check): an epoch
     # that disagrees with the velocity the accelerometers carried forward from the last
     # agreeing epoch has its variance grown to cover the disagreement; after two or more in a
