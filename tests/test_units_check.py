@@ -13,8 +13,10 @@ from sideslip.units_check import (
     check_lateral_axes,
     check_lateral_units,
     check_longitudinal,
+    check_steer_units,
     check_tilt_rate_units,
     lateral_axes,
+    steer_slope,
     tilt_excursion,
 )
 from sideslip.vehicle import load_vehicle
@@ -198,3 +200,31 @@ def test_a_gnss_speed_in_other_units_is_named_by_the_wheels(columns, factor, nam
     line = str(err.value)
     assert f"column '{named}': row " in line and f"is {ratio}" in line and "\n" not in line
     check_gnss_speed_units(sim_drive("urban_course"))  # as recorded: passes
+
+
+@pytest.mark.parametrize(("scenario", "factor", "reads"), [("demo", 15.0, "19.6"), ("banked_turn", 180.0 / np.pi, "66.")])
+def test_a_steering_wheel_angle_or_degrees_inside_the_range_limit_is_named(scenario, factor, reads):
+    """The demo drive with steer logged as a steering-wheel angle (x15: at most 0.33, inside
+    the 1.2 range limit) and banked_turn with steer in degrees (at most 0.94): in their gentle
+    turns steer follows the kinematic angle L w_z / v with slope 19.6 / 66.7 (1.31 / 1.16 in
+    rad).  obs_bicycle (which reads the steering) refuses the drive, naming steer, the row
+    and the steering ratio; fused (which does not) runs."""
+    drive = _scaled(sim_drive(scenario), {"steer": factor})
+    vehicle = load_vehicle(drive.meta["vehicle"])
+    with pytest.raises(InputError, match=r"column 'steer': row \d+: .*steer follows " + reads):
+        run_method("obs_bicycle", drive, vehicle)
+    with pytest.raises(InputError, match=r"divide a steering-wheel angle by the steering ratio"):
+        check_steer_units(drive, vehicle.lf + vehicle.lr)
+    assert np.isfinite(run_method("fused", drive, vehicle)["beta"]).all()
+
+
+@pytest.mark.parametrize("scenario", ["urban_course", "two_turns_gyro_sf", "cr_circle", "slalom_low_mu"])
+def test_road_wheel_angles_in_rad_pass_the_steering_check(scenario):
+    """The steering against L w_z / v on valid drives: 1 + K_us v^2 / L for an understeering
+    car, measured 0.82 (cr_circle) to 2.40 (two_turns_gyro_sf at speed) over the 16
+    scenarios x seeds 0-1 where judged (the Revs lap 1.39), inside the check's 0.3-6."""
+    drive = sim_drive(scenario)
+    vehicle = load_vehicle(drive.meta["vehicle"])
+    found = steer_slope(drive, vehicle.lf + vehicle.lr)
+    assert found is not None and 0.8 <= found[0] <= 2.5 and found[1] >= 0.9
+    assert check_steer_units(drive, vehicle.lf + vehicle.lr) == pytest.approx(found[0])

@@ -187,6 +187,61 @@ def check_lateral_axes(drive: Drive, uses_steer: bool) -> None:
         )
 
 
+# road-wheel angle over the kinematic one L w_z / v in gentle turns: 1 + K_us v^2 / L for an
+# understeering car (the bicycle model's steady state, Gillespie 1992 eq 6-15).  Measured
+# 0.82-2.40 (16 scenarios x seeds 0-1 where judged: cr_circle 0.82, two_turns_gyro_sf 2.40;
+# the Revs lap 1.39); a steering-wheel angle reads about the steering ratio (12-20 x), degrees
+# 57 x
+STEER_SLOPE_RANGE = (0.3, 6.0)
+MAX_HOLD_S = 0.5  # s: a held sample older than this is a gap, not a reading
+
+
+def steer_slope(drive: Drive, wheelbase_m: float) -> tuple[float, float, int] | None:
+    """``(slope, correlation, first row)`` of ``steer`` on the kinematic road-wheel angle
+    ``L w_z / v`` over the gentle turns (``|v w_z|`` in :data:`LINEAR_BAND`, faster than
+    :data:`MIN_SPEED`; both columns held across their gaps), or None where the drive lacks a
+    column or :data:`MIN_LINEAR_S` of such rows, or the wheelbase is not finite."""
+    if not np.isfinite(wheelbase_m) or wheelbase_m <= 0.0:
+        return None
+    if any(c not in drive for c in ("steer", "wz")) or speed_raw(drive) is None or len(drive) < 3:
+        return None
+    from sideslip.signals import hold
+
+    t = drive.t
+    steer, steer_age = hold(np.asarray(drive["steer"], dtype=float), t)
+    wz, wz_age = hold(np.asarray(drive["wz"], dtype=float), t)
+    v = vehicle_speed(drive)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        kinematic = wheelbase_m * wz / np.where(np.abs(v) > MIN_SPEED, v, np.inf)
+        centripetal = np.abs(v * wz)
+        rows = (
+            (steer_age < MAX_HOLD_S) & (wz_age < MAX_HOLD_S) & (v > MIN_SPEED)
+            & (centripetal >= LINEAR_BAND[0]) & (centripetal <= LINEAR_BAND[1])
+        )  # fmt: skip
+    if rows.sum() < max(50.0, MIN_LINEAR_S / drive.dt_median):
+        return None
+    xa = kinematic[rows] - kinematic[rows].mean()
+    ya = steer[rows] - steer[rows].mean()
+    if not (xa @ xa > 0.0 and ya @ ya > 0.0):
+        return None
+    return float(xa @ ya / (xa @ xa)), float(np.corrcoef(xa, ya)[0, 1]), int(np.flatnonzero(rows)[0])
+
+
+def check_steer_units(drive: Drive, wheelbase_m: float) -> float | None:
+    """Raise :class:`InputError` naming column ``steer`` where the steering follows the
+    kinematic road-wheel angle ``L w_z / v`` tightly (correlation at least
+    :data:`MIN_CORRELATION`) with a slope outside :data:`STEER_SLOPE_RANGE`: a steering-wheel
+    angle (the steering ratio times the road wheels') or degrees that stay inside the range
+    limit of 1.2 (a highway's road-wheel angles are a degree or two).  Only for methods that
+    read the steering; returns the slope, or None where the drive cannot tell."""
+    return _in_range(
+        drive, steer_slope(drive, wheelbase_m), STEER_SLOPE_RANGE, "steer",
+        "in gentle turns (the first from this row) steer follows", "wheelbase x wz / speed",
+        "1-2.5 for the road-wheel angle in rad (a steering-wheel angle reads about the steering "
+        "ratio, 12-20; degrees 57): divide a steering-wheel angle by the steering ratio",
+    )  # fmt: skip
+
+
 LON_SMOOTH_S = 0.5  # s: moving mean of ax and the speed before the rate (wheel-speed steps)
 MIN_LON_ACCEL = 1.0  # m/s^2: |dv/dt| or |a_x| of the rows taken as speeding up or braking
 MIN_LON_S = 5.0  # s of such rows the check needs

@@ -32,6 +32,7 @@ from sideslip.units_check import (
     check_lateral_axes,
     check_lateral_units,
     check_longitudinal,
+    check_steer_units,
     check_tilt_rate_units,
     lateral_slope,
 )
@@ -291,7 +292,10 @@ def run_method(method: str | Method, drive: Drive, vehicle: Vehicle, settings: A
     check_tilt_rate_units(drive)
     check_longitudinal(drive)
     check_gnss_speed_units(drive)
-    check_lateral_axes(drive, "steer" in columns_used(method, drive))
+    uses_steer = "steer" in columns_used(method, drive)
+    check_lateral_axes(drive, uses_steer)
+    if uses_steer:
+        check_steer_units(drive, vehicle.lf + vehicle.lr)
     params = vehicle.missing(list(method.vehicle_params))
     if params:
         raise InputError(
