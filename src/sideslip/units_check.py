@@ -29,7 +29,7 @@ import numpy as np
 
 from sideslip.drive import Drive
 from sideslip.errors import InputError
-from sideslip.signals import sample_step, speed_raw, vehicle_speed
+from sideslip.signals import hold, sample_step, speed_raw, vehicle_speed
 
 MIN_SPEED = 5.0  # m/s: slower, the slip angles' share of the lateral motion grows
 MIN_CENTRIPETAL = 2.0  # m/s^2: |v w_z| of the rows taken as turning (a road bank is less)
@@ -205,8 +205,6 @@ def steer_slope(drive: Drive, wheelbase_m: float) -> tuple[float, float, int] | 
         return None
     if any(c not in drive for c in ("steer", "wz")) or speed_raw(drive) is None or len(drive) < 3:
         return None
-    from sideslip.signals import hold
-
     t = drive.t
     steer, steer_age = hold(np.asarray(drive["steer"], dtype=float), t)
     wz, wz_age = hold(np.asarray(drive["wz"], dtype=float), t)
@@ -237,8 +235,9 @@ def check_steer_units(drive: Drive, wheelbase_m: float) -> float | None:
     return _in_range(
         drive, steer_slope(drive, wheelbase_m), STEER_SLOPE_RANGE, "steer",
         "in gentle turns (the first from this row) steer follows", "wheelbase x wz / speed",
-        "1-2.5 for the road-wheel angle in rad (a steering-wheel angle reads about the steering "
-        "ratio, 12-20; degrees 57): divide a steering-wheel angle by the steering ratio",
+        "steer the road-wheel angle in rad (up to 2.5 with understeer; a steering-wheel angle "
+        "reads about the steering ratio, 12-20, degrees 57): divide a steering-wheel angle by "
+        "the steering ratio",
     )  # fmt: skip
 
 

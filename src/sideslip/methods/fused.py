@@ -574,9 +574,11 @@ def _speed_rate(drive: Drive, smooth: bool, tau: float) -> FloatArray:
     speed samples (:func:`sideslip.signals.speed_raw`) interpolated (smoother) or held (causal
     filter), differenced, and low-passed with time constant ``tau`` s (zero-phase off-line,
     causal in the filter; the low-pass of a held staircase's differences keeps its integral,
-    the speed).  It stands for the specific force a_x = v_x' - r v_y + g sin(pitch): v_y's
-    part and the grade's are left to the state's longitudinal offset c_x, as an
-    accelerometer's bias is.  Without it the input was 0, which the process model took as
+    the speed).  It is v_x' itself, not the specific force a_x = v_x' - r v_y + g sin(pitch)
+    an accelerometer reads: the process model drops its r v_y term for it
+    (``fused_engine.C_AX_SPEED_RATE``), and the grade's part is left to the state's
+    longitudinal offset c_x, as an accelerometer's bias is.  Rows before the first speed
+    sample hold that sample (no step from 0).  Without it the input was 0, which the process model took as
     exact: the Revs lap without its ax column, fused_filter 23.4 deg RMSE (35 % inside 2 sigma),
     the race lap with Doppler, fused 0.52 deg (FusedSettings.ax_from_speed_tau_s)."""
     raw = speed_raw(drive)
@@ -587,7 +589,7 @@ def _speed_rate(drive: Drive, smooth: bool, tau: float) -> FloatArray:
     if smooth:
         v = np.interp(t, t[ok], raw[ok])
         return _zero_phase_low_pass(t, _backward_rate(t, v), tau)
-    v = hold(raw, t)[0]
+    v = hold(raw, t, fill=float(raw[ok][0]))[0]
     return _low_pass(t, _backward_rate(t, v), tau)
 
 
