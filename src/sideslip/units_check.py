@@ -25,6 +25,8 @@ leaves them unrelated and the check silent) and the slope lies outside
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from sideslip.drive import Drive
@@ -220,9 +222,12 @@ def steer_slope(drive: Drive, wheelbase_m: float) -> tuple[float, float, int] | 
         return None
     xa = kinematic[rows] - kinematic[rows].mean()
     ya = steer[rows] - steer[rows].mean()
-    if not (xa @ xa > 0.0 and ya @ ya > 0.0):
+    sxx, syy = float(xa @ xa), float(ya @ ya)
+    spread = math.sqrt(sxx) * math.sqrt(syy)
+    if not spread > 0.0:  # a constant steering or yaw rate decides no slope
         return None
-    return float(xa @ ya / (xa @ xa)), float(np.corrcoef(xa, ya)[0, 1]), int(np.flatnonzero(rows)[0])
+    sxy = float(xa @ ya)
+    return sxy / sxx, sxy / spread, int(np.flatnonzero(rows)[0])
 
 
 def check_steer_units(drive: Drive, wheelbase_m: float) -> float | None:
