@@ -98,3 +98,22 @@ def test_module_names_stay_importable_beside_the_functions():
     assert estimate_module.Estimate is Estimate and callable(metrics)
     assert callable(ss.estimate) and callable(ss.evaluate)
     assert ss.simulate_drive("step_steer").t.size == 1201
+
+
+def test_a_bad_input_stops_the_run_before_any_method_runs():
+    """The demo drive with steer as a steering-wheel angle (x15, inside the 1.2 range limit):
+    the steering check of the methods that read it fails.  Every method the run will use is
+    checked first, so the one-line error comes before the first method starts (before, the
+    methods ahead of the first steering reader ran and their time was lost)."""
+    from sideslip.drive import Drive
+    from sideslip.errors import InputError
+    from tests.conftest import sim_drive
+
+    drive = sim_drive("demo")
+    data = dict(drive.data)
+    data["steer"] = np.asarray(drive["steer"]) * 15.0
+    bad = Drive(drive.t, data, drive.meta, drive.path)
+    events: list[tuple[str, str]] = []
+    with pytest.raises(InputError, match="column 'steer'"):
+        ss.estimate(bad, drive.meta["vehicle"], progress=lambda ev, name, *_: events.append((ev, name)))
+    assert not [e for e in events if e[0] == "start"], events

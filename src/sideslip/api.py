@@ -108,7 +108,7 @@ def estimate(
     :mod:`sideslip.settings`).  ``progress``: called as ``progress(event, name, i, n, detail)``
     with ``event`` "start", "done" (detail: seconds) or "skip" (detail: the reason).
     """
-    from sideslip.methods.registry import Method, all_methods, run_method, why_not
+    from sideslip.methods.registry import Method, all_methods, check_method, run_method, why_not
 
     d = _as_drive(drive)
     veh = load_vehicle(vehicle)
@@ -121,19 +121,24 @@ def estimate(
     done: list[Estimate] = []
     skipped: dict[str, str] = {}
     total = len(chosen)
+    # every method that will run is checked before the first runs: a bad input stops the run
+    # with its one line before any method has spent time on it (contract section 5)
+    resolved: dict[str, Any] = {}
+    for name, m in chosen:
+        if isinstance(m, Method) and (explicit or why_not(m, d, veh) is None):
+            resolved[name] = check_method(m, d, veh, settings.get(name))  # the precise one line
     for i, (name, m) in enumerate(chosen):
-        if isinstance(m, Method):
-            reason = why_not(m, d, veh)
-            if reason is not None and not explicit:
-                skipped[name] = reason
-                if progress:
-                    progress("skip", name, i, total, reason)
-                continue
+        if isinstance(m, Method) and name not in resolved:
+            reason = why_not(m, d, veh) or ""
+            skipped[name] = reason
+            if progress:
+                progress("skip", name, i, total, reason)
+            continue
         if progress:
             progress("start", name, i, total, "")
         start = time.perf_counter()
         if isinstance(m, Method):
-            est = run_method(m, d, veh, settings.get(name))  # raises the precise one-line error
+            est = run_method(m, d, veh, resolved[name], checked=True)
         else:
             est = _run_plain(m, name, d, veh)
         done.append(est)

@@ -95,7 +95,7 @@ def _estimate(spec: JobSpec, local_drive: Path, out_local: Path) -> JobResult:
     from sideslip.drive import load_drive
     from sideslip.estimate import save_estimates
     from sideslip.evaluate import evaluate_all
-    from sideslip.methods.registry import run_method, why_not
+    from sideslip.methods.registry import check_method, run_method, why_not
 
     try:
         drive = load_drive(local_drive)
@@ -106,12 +106,15 @@ def _estimate(spec: JobSpec, local_drive: Path, out_local: Path) -> JobResult:
     drive = type(drive)(drive.t, drive.data, drive.meta, spec.drive)  # messages name the input
     estimates = []
     skipped: dict[str, str] = {}
+    runnable = []
     for m in _chosen(spec.methods):
         reason = why_not(m, drive, spec.vehicle)
-        if reason is None:
-            estimates.append(run_method(m, drive, spec.vehicle, spec.settings.get(m.name)))
+        if reason is None:  # checked before any runs: a bad input costs no method's time
+            runnable.append((m, check_method(m, drive, spec.vehicle, spec.settings.get(m.name))))
         else:
             skipped[m.name] = reason
+    for m, resolved in runnable:
+        estimates.append(run_method(m, drive, spec.vehicle, resolved, checked=True))
     if not estimates:
         raise InputError(
             spec.drive,

@@ -263,10 +263,13 @@ def _steer_yaw_correlation(drive: Drive) -> float | None:
     return float(c) if np.isfinite(c) else None
 
 
-def run_method(method: str | Method, drive: Drive, vehicle: Vehicle, settings: Any = None) -> Estimate:
-    """Run one method (by name or Method) after checking its needs; raises InputError naming
-    what is missing.  ``settings``: an instance of the method's settings class, a mapping of
-    field -> value applied to its defaults, or None for the defaults."""
+def check_method(method: str | Method, drive: Drive, vehicle: Vehicle, settings: Any = None) -> Any:
+    """Every check :func:`run_method` makes before it runs ``method`` on ``drive``: its
+    settings, its columns, the drive's units and axes (``sideslip.units_check``) and the
+    vehicle file's parameters; raises the one-line InputError naming what is wrong.  Returns
+    the settings resolved (an instance of the method's settings class, or None).  Callers that
+    run several methods check them all first, so that a bad input stops the run before any
+    method has run (contract section 5)."""
     method = get_method(method)
     if method.settings is None and settings is not None:
         raise InputError("settings", f"method '{method.name}' has no settings")
@@ -303,6 +306,20 @@ def run_method(method: str | Method, drive: Drive, vehicle: Vehicle, settings: A
             f"parameter '{params[0]}' is needed by method '{method.name}' "
             "but the vehicle file does not give it",
         )
+    return settings
+
+
+def run_method(
+    method: str | Method, drive: Drive, vehicle: Vehicle, settings: Any = None, checked: bool = False
+) -> Estimate:
+    """Run one method (by name or Method) after checking its needs (:func:`check_method`);
+    raises InputError naming what is missing.  ``settings``: an instance of the method's
+    settings class, a mapping of field -> value applied to its defaults, or None for the
+    defaults.  ``checked``: :func:`check_method` has passed and ``settings`` is what it
+    returned (the checks are not repeated)."""
+    method = get_method(method)
+    if not checked:
+        settings = check_method(method, drive, vehicle, settings)
     moved_note = None
     # an IMU stamped late against the Doppler and the wheels is moved back by the lag the
     # drive decides (sideslip.imu_timing; race_lap with the IMU 50 ms late: fused 0.132 ->
