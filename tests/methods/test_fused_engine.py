@@ -136,17 +136,18 @@ def test_blocked_smoother_equals_one_block(monkeypatch) -> None:
         np.testing.assert_allclose(blocked.series[name], one.series[name], rtol=1e-13, atol=1e-15)
 
 
-@pytest.mark.parametrize("holes", [False, True])
+@pytest.mark.parametrize("holes", [False, True, "no ax"])
 @pytest.mark.parametrize("gnss", [True, False])
 @pytest.mark.parametrize("method", ["fused", "fused_filter"])
 def test_long_drive_rebuilding_the_row_inputs_gives_the_same_estimate(
-    monkeypatch, method: str, gnss: bool, holes: bool
+    monkeypatch, method: str, gnss: bool, holes: bool | str
 ) -> None:
     """On a long drive ``fuse`` frees the per-row IMU inputs during the node pass and rebuilds
     them afterwards (memory, issue 17): the outputs and params equal the held-inputs path
     bit for bit (the threshold lowered below this drive's length), with and without GNSS
-    (whose absence changes the smoother's force low-pass), and with 0.5 s holes in a_y and w_z
-    (filled through the kinematics, fused._lateral_fill: the rebuild must fill them alike)."""
+    (whose absence changes the smoother's force low-pass), with 0.5 s holes in a_y and w_z
+    (filled through the kinematics, fused._lateral_fill: the rebuild must fill them alike), and
+    without an ax column (the speed's rate stands in, fused._speed_rate: the rebuild too)."""
     from sideslip.drive import Drive
     from sideslip.methods import fused
     from sideslip.methods.registry import run_method
@@ -155,7 +156,9 @@ def test_long_drive_rebuilding_the_row_inputs_gives_the_same_estimate(
 
     drive = simulate("dlc_bank", seed=0)
     kept = {k: v for k, v in drive.data.items() if gnss or not k.startswith("gnss_")}
-    if holes:
+    if holes == "no ax":
+        del kept["ax"]
+    elif holes:
         for name, start in (("ay", 800), ("wz", 1500), ("ay", 2300)):
             col = np.array(kept[name], dtype=float)
             col[start : start + 50] = np.nan
