@@ -4,13 +4,14 @@ file says, against the simulator's truth."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import pytest
 
 from sideslip.evaluate import metrics
 from sideslip.methods.fused import fuse
-from sideslip.methods.fused_lever import LeverCheck
+from sideslip.methods.fused_lever import ImuAlternative, LeverCheck
 from sideslip.methods.fused_settings import FusedSettings
 from sideslip.simulate import SensorConfig, simulate
 from sideslip.simulate.run import _lookup  # the scenario's own sensor overrides
@@ -49,6 +50,9 @@ def test_a_misplaced_antenna_is_found_and_moved_and_beta_follows_the_truth(offse
     assert p["gnss_lever_x_neg2ll_gain"] > 9.0
     assert "moved by it" in p["assumed"]["gnss_lever_x"]
     assert "gnss_lever_x" not in kept.params["assumed"]
+    # the IMU moved instead explains the Doppler worse than the antenna moved (measured
+    # -2 log L +13 / +5): the IMU stays where the file says
+    assert p["imu_lever_x_applied_m"] == 0.0
     rmse_kept = metrics(drive, kept.series)["beta_rmse_deg"]
     rmse_moved = metrics(drive, moved.series)["beta_rmse_deg"]
     assert rmse_moved < rmse_kept / 3.0, (rmse_moved, rmse_kept)
@@ -107,13 +111,20 @@ def test_a_false_tyre_free_offset_is_not_confirmed_by_the_tyres_and_the_file_is_
     assert p["gnss_lever_x_tyre_free_m"] > 3.0 * p["gnss_lever_x_tyre_free_m_sigma"]
     assert p["gnss_lever_x_neg2ll_gain"] is None  # within the gate: no second test
     assert p["gnss_lever_x_applied_m"] == 0.0
-    loose = fuse(drive, v, smooth=True, settings=FusedSettings(doppler_lever_z=2.0))
+    loose = fuse(drive, v, smooth=True, settings=FusedSettings(doppler_lever_z=2.0, check_imu_lever=False))
     q = loose.params
     assert q["gnss_lever_x_neg2ll_gain"] < 0.0
     assert q["gnss_lever_x_applied_m"] == 0.0
     assert "but with the tyres" in q["assumed"]["gnss_lever_x"]
     plain = fuse(drive, v, smooth=True, settings=OFF)
     assert (loose["beta"] == plain["beta"]).all()
+    # read as the IMU's, the same offset passes the looser gate (measured: the IMU -0.176 m,
+    # -2 log L 8.1 below the file's, 213 below the antenna moved), and moving the IMU that
+    # little leaves beta where it was (measured 0.01440 against 0.01442 deg)
+    imu = fuse(drive, v, smooth=True, settings=FusedSettings(doppler_lever_z=2.0))
+    assert imu.params["imu_lever_x_applied_m"] == pytest.approx(-q["gnss_lever_x_tyre_free_m"])
+    rmse = [metrics(drive, e.series)["beta_rmse_deg"] for e in (imu, plain)]
+    assert abs(rmse[0] - rmse[1]) < 0.002, rmse
 
 
 def test_the_gates_and_a_failed_pass():
@@ -185,3 +196,69 @@ def test_the_causal_filter_takes_the_antenna_the_smoothers_check_finds():
     assert two_sigma_share(drive, moved) >= 0.95
     online = fuse(drive, v, smooth=False, settings=FusedSettings(whole_drive_calibration=False))
     assert "gnss_lever_x" not in online.params["assumed"]
+
+
+def _imu_misplaced(name: str, offset_m: float):
+    """Scenario ``name`` (seed 0) with the IMU ``offset_m`` ahead of the vehicle file's
+    imu_xyz (the file returned says where it is not)."""
+    vehicle = load_vehicle(sim_drive(name).meta["vehicle"])
+    x, y, z = vehicle.imu_xyz
+    return simulate(name, seed=0, vehicle=dataclasses.replace(vehicle, imu_xyz=(x + offset_m, y, z))), vehicle
+
+
+def test_a_misplaced_imu_is_moved_and_the_antenna_is_left_where_the_file_says():
+    """race_lap with the IMU 1 m ahead of where the file says.  Tyre-free, the pass sees only
+    the antenna's place relative to the IMU: an antenna -0.92 +- 0.06 m ahead of the file's
+    (measured), and the antenna's own rule moved the antenna (beta 0.568 deg, measured).
+    With the tyres the IMU moved by +0.92 m predicts the Doppler better than the file's
+    installation and than the antenna moved, each with its own identified noise (measured
+    -2 log L -401 and -47), so the IMU moves (bound: within 0.15 m of the truth, 2.5 of the
+    pass's sigmas) and beta is as good as with the IMU where the file says (measured 0.027
+    against 0.028; bound 0.06 deg, a tenth of the misplaced run's error)."""
+    drive, vehicle = _imu_misplaced("race_lap", 1.0)
+    est = fuse(drive, vehicle, smooth=True)
+    p = est.params
+    assert p["imu_lever_x_applied_m"] == pytest.approx(1.0, abs=0.15)
+    assert p["gnss_lever_x_applied_m"] == 0.0
+    assert p["assumed"]["imu_lever_x"].startswith("moved +0.9")
+    assert metrics(drive, est.series)["beta_rmse_deg"] < 0.06
+    assert two_sigma_share(drive, est) >= 0.95
+    # the causal filter takes the smoother's verdict (measured 0.160 deg against 0.539)
+    causal = fuse(drive, vehicle, smooth=False)
+    assert causal.params["imu_lever_x_applied_m"] == p["imu_lever_x_applied_m"]
+    assert causal.params["assumed"]["imu_lever_x"].startswith("the smoother's check, moved")
+    assert metrics(drive, causal.series)["beta_rmse_deg"] < 0.25
+    assert two_sigma_share(drive, causal) >= 0.95
+
+
+def test_the_imu_against_the_antenna_and_the_likelihood_weights():
+    """The IMU moves only where it beats the file's installation by more than z_gate^2 and
+    the moved antenna too; each installation's weight is exp(-n / 2) normalised over the
+    ones in play (the file's not where the antenna's check moved the antenna)."""
+
+    def share(n, key):
+        return math.exp(-n[key] / 2.0) / sum(math.exp(-v / 2.0) for v in n.values())
+
+    # the antenna check kept the file's; the IMU 12 better than it: moved
+    a = ImuAlternative(-0.9, 100.0, 120.0, 88.0, False, 3.0)
+    assert a.applied and a.chosen == "imu" and a.params()["imu_lever_x_applied_m"] == 0.9
+    n = {"file": 100.0, "antenna": 120.0, "imu": 88.0}
+    assert a.weights() == pytest.approx({k: share(n, k) for k in n})
+    assert a.note().startswith("moved +0.900 m")
+    # 8 better than the file's: inside the gate, the file's kept, most weight on the IMU
+    b = ImuAlternative(-0.9, 100.0, 120.0, 92.0, False, 3.0)
+    assert not b.applied and b.chosen == "file" and b.params()["imu_lever_x_applied_m"] == 0.0
+    assert b.weights()["imu"] > 0.9
+    # beyond the gate against the file's but the moved antenna explains it better: kept
+    c = ImuAlternative(-0.45, 100.0, 79.3, 84.1, False, 3.0)
+    assert not c.applied and c.chosen == "file"
+    assert "the file's kept (the IMU +0.450 m" in c.note()
+    # the antenna moved, 5 better than the IMU: the antenna stays; the file's not in play
+    d = ImuAlternative(0.5, 100.0, 60.0, 65.0, True, 3.0)
+    assert not d.applied and d.chosen == "antenna"
+    assert set(d.weights()) == {"antenna", "imu"}
+    assert d.weights()["imu"] == pytest.approx(1.0 / (1.0 + math.exp(2.5)))
+    # ... and 5 worse than the IMU: the IMU moves, the antenna's weight as large
+    e = ImuAlternative(0.5, 100.0, 65.0, 60.0, True, 3.0)
+    assert e.applied and e.chosen == "imu"
+    assert e.weights()["antenna"] == pytest.approx(d.weights()["imu"])

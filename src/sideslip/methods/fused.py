@@ -129,8 +129,13 @@ With Doppler and fixes the smoother also checks the file's antenna position (``c
 finds ``dl_x``, and the antenna is moved only where that pass puts it beyond
 ``doppler_lever_z`` sigmas (less the part the node inputs' half-row timing accounts for, where
 they have one) and the filter with the tyres predicts the Doppler better with it moved
-(``params["assumed"]["gnss_lever_x"]``).  The causal filter, with ``whole_drive_calibration``,
-runs the smoother first and takes the antenna its check found.
+(``params["assumed"]["gnss_lever_x"]``).  Tyre-free the pass sees only the antenna's place
+relative to the IMU, so where it finds an offset the smoother also runs with the antenna
+moved and with the IMU moved the other way (``check_imu_lever``, ``ImuAlternative``), and the
+Doppler's likelihood with the tyres picks the installation; the ones not picked add their
+beta, by their likelihood weight, to ``beta_std`` (``params["assumed"]["imu_lever_x"]``).
+The causal filter, with ``whole_drive_calibration``, runs the smoother first and takes the
+antenna or the IMU its check found.
 
 Holes in the IMU inputs and pauses of the logger (rows missing; :mod:`sideslip.methods.input_gaps`):
 the smoother interpolates across a hole, the causal filter holds the last sample, a pause's
@@ -171,7 +176,7 @@ from sideslip.imu_lever import specific_force_at_cg
 from sideslip.methods import fused_engine as eng
 from sideslip.methods.fused_accel_offset import AccelOffset, lateral_accel_offset
 from sideslip.methods.fused_bursts import burst_epochs
-from sideslip.methods.fused_lever import check_lever, without_tyres
+from sideslip.methods.fused_lever import ImuAlternative, check_lever, imu_moved, without_tyres
 from sideslip.methods.fused_settings import (
     FusedSettings,
     accel_noise_sigma,
@@ -759,15 +764,81 @@ def _accel_offset(
 def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings | None = None) -> Estimate:
     """Run the fused EKF (and RTS smoother when ``smooth``); see the module docstring."""
     nz = settings or FusedSettings()
-    # the causal filter takes the antenna the smoother's check finds (a calibration of the
-    # installation read from the whole drive, as its noise levels are): the check needs the
-    # smoother's later samples, so the smoother runs first
-    smoother_lever: Estimate | None = None
-    if (
-        not smooth and nz.whole_drive_calibration and nz.check_doppler_lever
+    if smooth:
+        return _checked_smoother(drive, vehicle, nz)[0]
+    # the causal filter takes the antenna (or the IMU) the smoother's check finds (a
+    # calibration of the installation read from the whole drive, as its noise levels are): the
+    # check needs the smoother's later samples, so the smoother runs first
+    if not (
+        nz.whole_drive_calibration and nz.check_doppler_lever
         and not nz.identify_doppler_lever and "gnss_ve" in drive and "gnss_e" in drive
     ):  # fmt: skip
-        smoother_lever = fuse(drive, vehicle, smooth=True, settings=nz)
+        return _fuse(drive, vehicle, False, nz)
+    smoother_lever, spread = _checked_smoother(drive, vehicle, nz)
+    vehicle = imu_moved(vehicle, float(smoother_lever.params.get("imu_lever_x_applied_m") or 0.0))
+    est = _fuse(drive, vehicle, False, nz, smoother_lever)
+    if spread is not None:
+        series = {**est.series, "beta_std": np.hypot(est.series["beta_std"], spread)}
+        est = dataclasses.replace(est, series=series)
+    return est
+
+
+def _checked_smoother(
+    drive: Drive, vehicle: Vehicle, nz: FusedSettings
+) -> tuple[Estimate, FloatArray | None]:
+    """The smoother, with the IMU moved where its check finds it elsewhere; and the slip
+    (rad per row) that the installation not chosen adds to ``beta_std`` (None: not run).
+
+    Where the smoother's tyre-free check put the antenna off the file's by ``dl_x``
+    (:mod:`sideslip.methods.fused_lever`), the kinematics have said only that the antenna
+    sits ``dl_x`` further ahead *of the IMU* than the file says: the IMU ``dl_x`` behind its
+    file place explains the same.  The smoother is run twice more, with the antenna moved in
+    the file and with the IMU moved (each with the noise it identifies itself, as the file's
+    installation had), and their Doppler likelihoods with the tyres decide
+    (:class:`sideslip.methods.fused_lever.ImuAlternative`)."""
+    est = _fuse(drive, vehicle, True, nz)
+    p = est.params
+    pair = p.get("gnss_lever_x_neg2ll")
+    if not nz.check_imu_lever or pair is None:
+        return est, None
+    dl = float(p["gnss_lever_x_tyre_free_m"])
+    x, y, z = (float(c) for c in vehicle.gnss_xyz)
+    moved = dataclasses.replace(vehicle, gnss_xyz=(x + dl, y, z))
+    antenna = _fuse(drive, moved, True, nz, score_doppler=True)
+    alt = _fuse(drive, imu_moved(vehicle, -dl), True, nz, score_doppler=True)
+    verdict = ImuAlternative(
+        dl, float(pair[0]), float(antenna.params["gnss_doppler_neg2ll"]),
+        float(alt.params["gnss_doppler_neg2ll"]), bool(p["gnss_lever_x_applied_m"]),
+        nz.doppler_lever_z,
+    )  # fmt: skip
+    # the estimate of each installation: the check's own run stands for the one it settled on
+    runs = {"imu": alt, "antenna": est if verdict.antenna_applied else antenna, "file": est}
+    chosen = runs[verdict.chosen]
+    beta = chosen.series["beta"]
+    spread_sq = np.zeros_like(beta)
+    for key, weight in verdict.weights().items():
+        if key != verdict.chosen and runs[key] is not chosen:
+            spread_sq += weight * np.square(runs[key].series["beta"] - beta)
+    del runs, antenna, alt, est
+    spread = np.sqrt(spread_sq)
+    params = {**chosen.params, **verdict.params()}
+    params["assumed"] = {**chosen.params["assumed"], "imu_lever_x": verdict.note()}
+    series = {**chosen.series, "beta_std": np.hypot(chosen.series["beta_std"], spread)}
+    return dataclasses.replace(chosen, series=series, params=params), spread
+
+
+def _fuse(
+    drive: Drive,
+    vehicle: Vehicle,
+    smooth: bool,
+    nz: FusedSettings,
+    smoother_lever: Estimate | None = None,
+    score_doppler: bool = False,
+) -> Estimate:
+    """:func:`fuse` with its settings; the causal filter with ``smoother_lever``, the
+    smoother's estimate whose antenna check it takes; ``score_doppler``: the smoother
+    reports the Doppler's ``-2 log L`` with the tyres at its final antenna
+    (``params["gnss_doppler_neg2ll"]``)."""
     if not smooth and not nz.whole_drive_calibration:
         # strictly on-line: the file's roll gain, the receiver's stamps, the prior noise and
         # c_y a random walk (the roll gyro's bias would need the whole drive)
@@ -1036,7 +1107,11 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
         moved = float(smoother_lever.params.get("gnss_lever_x_applied_m") or 0.0)
         lever[0] += moved
         notes["gnss_lever_x"] = "the smoother's check, " + smoother_lever.params["assumed"]["gnss_lever_x"]
-        lever_params = {k: v for k, v in smoother_lever.params.items() if k.startswith("gnss_lever_x_")}
+        lever_params = {
+            k: v for k, v in smoother_lever.params.items() if k.startswith(("gnss_lever_x_", "imu_lever_x_"))
+        }
+    if smoother_lever is not None and "imu_lever_x" in smoother_lever.params["assumed"]:
+        notes["imu_lever_x"] = "the smoother's check, " + smoother_lever.params["assumed"]["imu_lever_x"]
     del smoother_lever
     if latency is not None:
         # the antenna's lateral lever arm from the same tyre-free fit (sideslip.gnss_latency),
@@ -1089,10 +1164,15 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
         if lever_check.found:
             file_x = float(lever[0])
             neg2ll = _doppler_neg2ll(before, g_age, after, (file_x, file_x + lever_check.dl_x_m))
-            lever_check = dataclasses.replace(lever_check, gain=neg2ll[0] - neg2ll[1])
+            lever_check = dataclasses.replace(
+                lever_check, gain=neg2ll[0] - neg2ll[1], neg2ll=(neg2ll[0], neg2ll[1])
+            )
         notes["gnss_lever_x"] = lever_check.note()
         if lever_check.applied:
             lever[0] += lever_check.dl_x_m
+    doppler_score = None
+    if score_doppler and has_vel:
+        doppler_score = _doppler_neg2ll(before, g_age, after, (float(lever[0]),))[0]
     xs, var, var_last, cov_vxvy, nis, counts = eng.run_nodes(*before, g_age, *after)
     if smooth and has_vel and nz.doppler_burst_check:
         # a multipath burst the forward check let in stands out from the smoothed track
@@ -1216,6 +1296,8 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     if lever_check is not None:
         node_params.update(lever_check.params())
     node_params.update(lever_params)
+    if doppler_score is not None:
+        node_params["gnss_doppler_neg2ll"] = doppler_score
     del xs, var, cov_vxvy  # the row outputs need only the columns copied above
     if rebuild:
         speed_rows = speed_raw(drive)

@@ -37,6 +37,7 @@ to 489 in six of seven cells printed.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import Any
@@ -45,8 +46,9 @@ import numpy as np
 
 from sideslip.methods import fused_engine as eng
 from sideslip.models.fused_process import ILX, ILY, ITAU, IVX, NX_CORE, NX_GNSS_CAL, f_rows
+from sideslip.vehicle import Vehicle
 
-__all__ = ["LeverCheck", "check_lever", "without_tyres"]
+__all__ = ["ImuAlternative", "LeverCheck", "check_lever", "imu_moved", "without_tyres"]
 
 # the axle relations' residual floor (m/s^2) that takes the tyres out of the pass: a million
 # times any lateral acceleration, so they carry no information on v_y
@@ -65,6 +67,8 @@ class LeverCheck:
     gain: float = math.nan
     timing_m: float = 0.0  # the part of dl_x_m the node inputs' half-row lag accounts for
     timing_sigma_m: float | None = None  # the timing's uncertainty (m); None: timing_m
+    # -2 log L of the Doppler with the tyres, the file's antenna and the moved one (where found)
+    neg2ll: tuple[float, float] | None = None
 
     @property
     def z(self) -> float:
@@ -107,7 +111,81 @@ class LeverCheck:
             "gnss_lever_x_tyre_free_m_sigma": self.sigma_m if found else None,
             "gnss_lever_x_timing_m": self.timing_m,
             "gnss_lever_x_neg2ll_gain": self.gain if math.isfinite(self.gain) else None,
+            "gnss_lever_x_neg2ll": None if self.neg2ll is None else list(self.neg2ll),
             "gnss_lever_x_applied_m": self.dl_x_m if self.applied else 0.0,
+        }
+
+
+def imu_moved(vehicle: Vehicle, dx_m: float) -> Vehicle:
+    """``vehicle`` with its IMU ``dx_m`` further ahead (the same where ``dx_m`` is 0)."""
+    if dx_m == 0.0:
+        return vehicle
+    x, y, z = (float(c) for c in vehicle.imu_xyz)
+    return dataclasses.replace(vehicle, imu_xyz=(x + dx_m, y, z))
+
+
+@dataclass(frozen=True)
+class ImuAlternative:
+    """The tyre-free offset ``dl_x_m`` (antenna ahead of the file's, relative to the IMU) read
+    the other way: the IMU ``dl_x_m`` behind the file's place.  Kinematically the two are
+    one: an accelerometer at ``x_i`` integrates to the lateral velocity of its own point,
+    ``v_y + r x_i`` (its x reading carries the same ``-x_i r^2``, so neither separates them),
+    and the Doppler gives the antenna's, ``v_y + r x_a``; only ``x_a - x_i`` is seen.  The
+    tyres place the CG, so the Doppler's ``-2 log L`` with the tyres (the forward filter's
+    innovations, each installation with the noise it identifies itself) decides: the IMU is
+    moved where it beats the file's installation by more than ``z_gate^2`` (the antenna's own
+    rule) and the moved antenna too.  Otherwise the installation :class:`LeverCheck`
+    settled on stays (the file's, or the antenna moved where ``antenna_applied``).
+
+    The installations' likelihood weights (:meth:`weights`: ``exp(-n / 2)`` normalised, the
+    file's left out where the antenna was moved, as it was there beaten beyond the gate)
+    put the others' beta, weighted, into ``beta_std``: where the Doppler hardly tells them
+    apart the sigma covers both."""
+
+    dl_x_m: float
+    neg2ll_file: float
+    neg2ll_antenna: float
+    neg2ll_imu: float
+    antenna_applied: bool
+    z_gate: float
+
+    @property
+    def applied(self) -> bool:
+        """The IMU moved."""
+        gain = self.neg2ll_file - self.neg2ll_imu
+        return bool(gain > self.z_gate**2 and self.neg2ll_imu < self.neg2ll_antenna)
+
+    @property
+    def chosen(self) -> str:
+        """``"imu"``, ``"antenna"`` or ``"file"``: the installation the estimate takes."""
+        return "imu" if self.applied else ("antenna" if self.antenna_applied else "file")
+
+    def weights(self) -> dict[str, float]:
+        """Each installation's share of the likelihood (the file's not where the antenna moved)."""
+        n = {"antenna": self.neg2ll_antenna, "imu": self.neg2ll_imu}
+        if not self.antenna_applied:
+            n["file"] = self.neg2ll_file
+        low = min(n.values())
+        w = {k: math.exp(-(v - low) / 2.0) for k, v in n.items()}
+        total = sum(w.values())
+        return {k: v / total for k, v in w.items()}
+
+    def note(self) -> str:
+        others = ", ".join(f"{k} {v:.2f}" for k, v in self.weights().items() if k != self.chosen)
+        versus = (
+            f"with the tyres -2 log L of the Doppler {self.neg2ll_imu - self.neg2ll_file:+.1f} against "
+            f"the file's, {self.neg2ll_imu - self.neg2ll_antenna:+.1f} against the antenna moved; "
+            f"likelihood weights of the others: {others}"
+        )
+        if self.applied:
+            return f"moved {-self.dl_x_m:+.3f} m (the tyre-free offset read as the IMU's; {versus})"
+        return f"the file's kept (the IMU {-self.dl_x_m:+.3f} m: {versus})"
+
+    def params(self) -> dict[str, Any]:
+        return {
+            "imu_lever_x_applied_m": -self.dl_x_m if self.applied else 0.0,
+            "imu_lever_x_neg2ll": self.neg2ll_imu,
+            "imu_lever_x_weights": self.weights(),
         }
 
 

@@ -320,6 +320,12 @@ class FusedSettings:
     # with it where the file says 0.0482 -> 0.0482 (fused_accuracy.md)
     check_doppler_lever: bool = True
     doppler_lever_z: float = 3.0
+    # where that check finds the antenna off (tyre-free the kinematics see only the antenna's
+    # place relative to the IMU), the smoother runs once more with the IMU moved by -dl_x
+    # instead and takes whichever of the file's installation, the moved antenna and the
+    # moved IMU the Doppler's likelihood with the tyres prefers (the IMU by more than
+    # doppler_lever_z^2 over the file's; sideslip.methods.fused_lever.ImuAlternative)
+    check_imu_lever: bool = True
     # positions only: the receiver's latency from the fixes' speed against the wheels
     # (sideslip.gnss_latency; tyre-free, so slip cannot pass for delay), combined with the
     # prior N(0, latency_prior_sigma_s); the prior's noise stays on the positions.  The
