@@ -134,8 +134,12 @@ relative to the IMU, so where it finds an offset the smoother also runs with the
 moved and with the IMU moved the other way (``check_imu_lever``, ``ImuAlternative``), and the
 Doppler's likelihood with the tyres picks the installation; the ones not picked add their
 beta, by their likelihood weight, to ``beta_std`` (``params["assumed"]["imu_lever_x"]``).
+A sensor box the file misplaces moves antenna and IMU together, which neither check sees; in
+the turns slower than ``box_speed_max_m_s`` the rear axle barely slides sideways, and there the
+Doppler puts the antenna against the rear axle (``check_box_lever``,
+:mod:`sideslip.methods.fused_box`, ``params["assumed"]["box_x"]``).
 The causal filter, with ``whole_drive_calibration``, runs the smoother first and takes the
-antenna or the IMU its check found.
+antenna, the IMU or the box its checks found.
 
 Holes in the IMU inputs and pauses of the logger (rows missing; :mod:`sideslip.methods.input_gaps`):
 the smoother interpolates across a hole, the causal filter holds the last sample, a pause's
@@ -175,6 +179,7 @@ from sideslip.gnss_latency import identify_latency
 from sideslip.imu_lever import specific_force_at_cg
 from sideslip.methods import fused_engine as eng
 from sideslip.methods.fused_accel_offset import AccelOffset, lateral_accel_offset
+from sideslip.methods.fused_box import antenna_from_slow_turns
 from sideslip.methods.fused_bursts import burst_epochs
 from sideslip.methods.fused_lever import ImuAlternative, check_lever, imu_moved, without_tyres
 from sideslip.methods.fused_settings import (
@@ -775,7 +780,13 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     ):  # fmt: skip
         return _fuse(drive, vehicle, False, nz)
     smoother_lever, spread = _checked_smoother(drive, vehicle, nz)
-    vehicle = imu_moved(vehicle, float(smoother_lever.params.get("imu_lever_x_applied_m") or 0.0))
+    p = smoother_lever.params
+    box = float(p.get("box_x_applied_m") or 0.0)
+    imu_x = float(p.get("imu_lever_x_applied_m") or 0.0) + float(p.get("box_imu_x_m") or 0.0)
+    vehicle = imu_moved(vehicle, imu_x)
+    if box:
+        x, y, z = (float(c) for c in vehicle.gnss_xyz)
+        vehicle = dataclasses.replace(vehicle, gnss_xyz=(x + box, y, z))
     est = _fuse(drive, vehicle, False, nz, smoother_lever)
     if spread is not None:
         series = {**est.series, "beta_std": np.hypot(est.series["beta_std"], spread)}
@@ -796,6 +807,52 @@ def _checked_smoother(
     the file and with the IMU moved (each with the noise it identifies itself, as the file's
     installation had), and their Doppler likelihoods with the tyres decide
     (:class:`sideslip.methods.fused_lever.ImuAlternative`)."""
+    est, spread = _imu_checked(drive, vehicle, nz)
+    if not (nz.check_box_lever and nz.check_doppler_lever):
+        # the box check moves antenna and IMU as the relative check left them: without that
+        # check their place against each other is not known
+        return est, spread
+    # the installation the checks settled on, and the relative offset none of them took
+    p = est.params
+    imu_x = float(p.get("imu_lever_x_applied_m") or 0.0)
+    ant_x = float(p.get("gnss_lever_x_applied_m") or 0.0)
+    settled = imu_moved(vehicle, imu_x)
+    x, y, z = (float(c) for c in settled.gnss_xyz)
+    settled = dataclasses.replace(settled, gnss_xyz=(x + ant_x, y, z))
+    unresolved = 0.0
+    if p.get("gnss_lever_x_neg2ll") is not None and not (imu_x or ant_x):
+        unresolved = float(p["gnss_lever_x_tyre_free_m"])
+    box = antenna_from_slow_turns(
+        drive, settled, est, nz.box_speed_min_m_s, nz.box_speed_max_m_s, nz.box_accel_max_m_s2,
+        nz.box_block_s, nz.box_min_blocks, nz.doppler_lever_z,
+    )  # fmt: skip
+    extra: dict[str, Any] = box.params()
+    note = box.note()
+    if box.applied:
+        # the antenna by d; the IMU by d less the relative offset the tyre-free pass found and
+        # no check took (antenna and IMU keep the place against each other the pass saw)
+        x, y, z = (float(c) for c in settled.gnss_xyz)
+        moved = imu_moved(dataclasses.replace(settled, gnss_xyz=(x + box.d_m, y, z)), box.d_m - unresolved)
+        nz_box = dataclasses.replace(nz, check_doppler_lever=False)
+        est = _fuse(drive, moved, True, nz_box)
+        extra["box_imu_x_m"] = box.d_m - unresolved
+        # the place is known to its sigma: r sigma / v of slip
+        slip = box.sigma_m * np.abs(est.series["r"]) / np.maximum(np.abs(est.series["vx"]), nz.axle_min_speed)
+        spread = slip if spread is None else np.hypot(spread, slip)
+        series = {**est.series, "beta_std": np.hypot(est.series["beta_std"], slip)}
+        est = dataclasses.replace(est, series=series)
+    # the first checks' findings stay in the params (the run above had them switched off)
+    params = {**est.params, **{k: v for k, v in p.items() if k.startswith(("gnss_lever_x_", "imu_lever_x_"))}}
+    params.update(extra)
+    first = {k: p["assumed"][k] for k in ("gnss_lever_x", "imu_lever_x") if k in p["assumed"]}
+    params["assumed"] = {**est.params["assumed"], **first, "box_x": note}
+    return dataclasses.replace(est, params=params), spread
+
+
+def _imu_checked(
+    drive: Drive, vehicle: Vehicle, nz: FusedSettings
+) -> tuple[Estimate, FloatArray | None]:
+    """The smoother with its antenna check and the IMU alternative (:func:`_checked_smoother`)."""
     est = _fuse(drive, vehicle, True, nz)
     p = est.params
     pair = p.get("gnss_lever_x_neg2ll")
@@ -1108,10 +1165,13 @@ def _fuse(
         lever[0] += moved
         notes["gnss_lever_x"] = "the smoother's check, " + smoother_lever.params["assumed"]["gnss_lever_x"]
         lever_params = {
-            k: v for k, v in smoother_lever.params.items() if k.startswith(("gnss_lever_x_", "imu_lever_x_"))
+            k: v
+            for k, v in smoother_lever.params.items()
+            if k.startswith(("gnss_lever_x_", "imu_lever_x_", "box_x_", "box_imu_x_"))
         }
-    if smoother_lever is not None and "imu_lever_x" in smoother_lever.params["assumed"]:
-        notes["imu_lever_x"] = "the smoother's check, " + smoother_lever.params["assumed"]["imu_lever_x"]
+    for check in ("imu_lever_x", "box_x"):
+        if smoother_lever is not None and check in smoother_lever.params["assumed"]:
+            notes[check] = "the smoother's check, " + smoother_lever.params["assumed"][check]
     del smoother_lever
     if latency is not None:
         # the antenna's lateral lever arm from the same tyre-free fit (sideslip.gnss_latency),

@@ -326,6 +326,19 @@ class FusedSettings:
     # moved IMU the Doppler's likelihood with the tyres prefers (the IMU by more than
     # doppler_lever_z^2 over the file's; sideslip.methods.fused_lever.ImuAlternative)
     check_imu_lever: bool = True
+    # with Doppler (smoother): the antenna's place from the turns slower than
+    # box_speed_max_m_s, where the rear axle does not slide sideways (regressed against the
+    # yaw rate beside a stiffness-free linear slip term; sideslip.methods.fused_box); a sensor
+    # box the file misplaces moves antenna and IMU together, which the check above cannot see.
+    # Moved where beyond doppler_lever_z jackknife sigmas over box_block_s blocks, judged with
+    # box_min_blocks blocks of such turns at least; with check_doppler_lever only (the place
+    # of antenna and IMU against each other is that check's)
+    check_box_lever: bool = True
+    box_speed_min_m_s: float = 2.0
+    box_speed_max_m_s: float = 9.0
+    box_accel_max_m_s2: float = 3.0
+    box_block_s: float = 10.0
+    box_min_blocks: int = 5
     # positions only: the receiver's latency from the fixes' speed against the wheels
     # (sideslip.gnss_latency; tyre-free, so slip cannot pass for delay), combined with the
     # prior N(0, latency_prior_sigma_s); the prior's noise stays on the positions.  The
