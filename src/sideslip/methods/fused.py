@@ -771,9 +771,9 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     nz = settings or FusedSettings()
     if smooth:
         return _checked_smoother(drive, vehicle, nz)[0]
-    # the causal filter takes the antenna (or the IMU) the smoother's check finds (a
-    # calibration of the installation read from the whole drive, as its noise levels are): the
-    # check needs the smoother's later samples, so the smoother runs first
+    # the causal filter takes the installation (antenna, IMU, both) the smoother's checks find
+    # (a calibration read from the whole drive, as its noise levels are): the checks need the
+    # smoother's later samples, so the smoother runs first
     if not (
         nz.whole_drive_calibration and nz.check_doppler_lever
         and not nz.identify_doppler_lever and "gnss_ve" in drive and "gnss_e" in drive
@@ -797,16 +797,14 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
 def _checked_smoother(
     drive: Drive, vehicle: Vehicle, nz: FusedSettings
 ) -> tuple[Estimate, FloatArray | None]:
-    """The smoother, with the IMU moved where its check finds it elsewhere; and the slip
-    (rad per row) that the installation not chosen adds to ``beta_std`` (None: not run).
+    """The smoother on the installation its checks settle on; and the slip (rad per row) that
+    the checks' doubt adds to ``beta_std`` (None: nothing added).
 
-    Where the smoother's tyre-free check put the antenna off the file's by ``dl_x``
-    (:mod:`sideslip.methods.fused_lever`), the kinematics have said only that the antenna
-    sits ``dl_x`` further ahead *of the IMU* than the file says: the IMU ``dl_x`` behind its
-    file place explains the same.  The smoother is run twice more, with the antenna moved in
-    the file and with the IMU moved (each with the noise it identifies itself, as the file's
-    installation had), and their Doppler likelihoods with the tyres decide
-    (:class:`sideslip.methods.fused_lever.ImuAlternative`)."""
+    First the antenna against the IMU (:func:`_imu_checked`), then both together from the
+    slow turns (:mod:`sideslip.methods.fused_box`): where those put the antenna beyond the
+    gate, antenna and IMU move by it and the smoother runs once more (its antenna pass off:
+    the place of the two against each other is the first check's), and the slow turns'
+    sigma joins ``beta_std`` as ``sigma r / v``."""
     est, spread = _imu_checked(drive, vehicle, nz)
     if not (nz.check_box_lever and nz.check_doppler_lever):
         # the box check moves antenna and IMU as the relative check left them: without that
@@ -839,7 +837,7 @@ def _checked_smoother(
         # the place is known to its sigma: r sigma / v of slip
         slip = box.sigma_m * np.abs(est.series["r"]) / np.maximum(np.abs(est.series["vx"]), nz.axle_min_speed)
         spread = slip if spread is None else np.hypot(spread, slip)
-        series = {**est.series, "beta_std": np.hypot(est.series["beta_std"], slip)}
+        series = {**est.series, "beta_std": np.hypot(est.series["beta_std"], spread)}
         est = dataclasses.replace(est, series=series)
     # the first checks' findings stay in the params (the run above had them switched off)
     params = {**est.params, **{k: v for k, v in p.items() if k.startswith(("gnss_lever_x_", "imu_lever_x_"))}}
@@ -852,7 +850,15 @@ def _checked_smoother(
 def _imu_checked(
     drive: Drive, vehicle: Vehicle, nz: FusedSettings
 ) -> tuple[Estimate, FloatArray | None]:
-    """The smoother with its antenna check and the IMU alternative (:func:`_checked_smoother`)."""
+    """The smoother with its antenna check and the IMU alternative.
+
+    Where the smoother's tyre-free check put the antenna off the file's by ``dl_x``
+    (:mod:`sideslip.methods.fused_lever`), the kinematics have said only that the antenna
+    sits ``dl_x`` further ahead *of the IMU* than the file says: the IMU ``dl_x`` behind its
+    file place explains the same.  The smoother is run twice more, with the antenna moved in
+    the file and with the IMU moved (each with the noise it identifies itself, as the file's
+    installation had), and their Doppler likelihoods with the tyres decide
+    (:class:`sideslip.methods.fused_lever.ImuAlternative`)."""
     est = _fuse(drive, vehicle, True, nz)
     p = est.params
     pair = p.get("gnss_lever_x_neg2ll")
