@@ -823,6 +823,7 @@ def _checked_smoother(
     box = antenna_from_slow_turns(
         drive, settled, est, nz.box_speed_min_m_s, nz.box_speed_max_m_s, nz.box_accel_max_m_s2,
         nz.box_block_s, nz.box_min_blocks, nz.doppler_lever_z,
+        float(p.get("gnss_doppler_latency_s") or 0.0),
     )  # fmt: skip
     extra: dict[str, Any] = box.params()
     note = box.note()
