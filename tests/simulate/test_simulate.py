@@ -44,6 +44,18 @@ def test_unknown_scenario_is_named_and_the_valid_ones_listed() -> None:
         describe("nope")
 
 
+def test_tyre_relaxation_is_recorded_and_refused_where_it_cannot_apply() -> None:
+    drive = simulate("step_steer", seed=0, tyre_relaxation_m=0.5)
+    assert drive.meta["tyre_relaxation_m"] == 0.5
+    assert "tyre_relaxation_m" not in sim_drive("step_steer").meta
+    with pytest.raises(InputError) as err:
+        simulate("step_steer", seed=0, tyre_relaxation_m=-1.0)
+    assert str(err.value) == "scenario 'step_steer': tyre relaxation -1.0 m: expected 0 to 5"
+    with pytest.raises(InputError) as err:
+        simulate("cr_step_steer", seed=0, tyre_relaxation_m=0.5)
+    assert "CommonRoad's own tyre model; expected no tyre relaxation" in str(err.value)
+
+
 def test_negative_seed_is_refused() -> None:
     with pytest.raises(InputError, match=r"seed -1: expected an integer >= 0"):
         simulate("step_steer", seed=-1)

@@ -32,6 +32,8 @@ class ModelOptions:
     pitch_gain         suspension pitch per longitudinal specific force, rad/(m/s^2)
     tau_pitch          its time constant, s
     tyre               Magic Formula shape factors
+    relaxation_m       tyre relaxation length, m: each tyre's lateral force follows its slip
+                       angle through a first-order lag over this much travel (0: at once)
     """
 
     front_roll_share: float = 0.55
@@ -46,6 +48,7 @@ class ModelOptions:
     pitch_gain: float = math.radians(1.5) / G
     tau_pitch: float = 0.12
     tyre: TyreShape = field(default_factory=TyreShape)
+    relaxation_m: float = 0.0
 
 
 class ModelParams(NamedTuple):
@@ -78,6 +81,7 @@ class ModelParams(NamedTuple):
     tau_load: float  # s
     pitch_gain: float  # rad/(m/s^2)
     tau_pitch: float  # s
+    relaxation_m: float  # tyre relaxation length, m (0: the force follows the slip at once)
     # Magic Formula shape (sideslip.simulate.tyre)
     tyre_c_y: float
     tyre_e_y: float
@@ -137,6 +141,7 @@ def model_params(vehicle: Vehicle, plan: Plan, options: ModelOptions, length: fl
         tau_load=float(options.tau_load),
         pitch_gain=float(options.pitch_gain),
         tau_pitch=float(options.tau_pitch),
+        relaxation_m=float(options.relaxation_m),
         tyre_c_y=float(tyre.c_y),
         tyre_e_y=float(tyre.e_y),
         tyre_load_exponent=float(tyre.load_exponent),

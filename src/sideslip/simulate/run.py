@@ -8,7 +8,9 @@ model (``sideslip.simulate.commonroad``), draws the sensor errors from a generat
 
 from __future__ import annotations
 
+import dataclasses
 import importlib
+import math
 from typing import Any
 
 import numpy as np
@@ -83,6 +85,7 @@ def simulate(
     vehicle: Vehicle | None = None,
     config: SensorConfig | None = None,
     duration_s: float | None = None,
+    tyre_relaxation_m: float = 0.0,
 ) -> Drive:
     """Simulate a scenario and return a validated 100 Hz drive with reference columns.
 
@@ -94,17 +97,31 @@ def simulate(
     config    sensor grades (default: ``SensorConfig()`` with the scenario's
               ``sensor_overrides``); when given it is used as is
     duration_s  optional length of the drive, s (default: the scenario's); not for ``cr_``
+    tyre_relaxation_m  the truth's tyre relaxation length, m (default 0: each tyre's force
+              follows its slip at once, as every table in benchmarks/results was made; real
+              passenger-car tyres take 0.5-1.5 m, Pacejka 2012 sec. 7.2); not for ``cr_``
 
     ``drive.meta``: ``scenario``, ``seed``, ``vehicle`` (preset name, or the vehicle's source
     when it is not an unmodified preset), ``vehicle_params``, ``source``, ``truth_sensor``
     (the true sensor errors drawn: gyro_bias, gyro_scale_factor, accel_bias,
-    wheel_scale_factor, steer_offset, steer_scale_factor, ...), ``sensor_config``.
+    wheel_scale_factor, steer_offset, steer_scale_factor, ...), ``sensor_config``; and
+    ``tyre_relaxation_m`` where it is not 0.
     """
     spec = _lookup(scenario)
     if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
         raise InputError(f"scenario '{scenario}'", f"seed {seed!r}: expected an integer >= 0")
     cfg = config if config is not None else SensorConfig().with_overrides(spec.sensor_overrides)
+    relaxation = float(tyre_relaxation_m)
+    if not (math.isfinite(relaxation) and 0.0 <= relaxation <= 5.0):
+        raise InputError(
+            f"scenario '{scenario}'", f"tyre relaxation {tyre_relaxation_m!r} m: expected 0 to 5"
+        )
     if scenario in commonroad.CR_SCENARIOS:
+        if relaxation:
+            raise InputError(
+                f"scenario '{scenario}'",
+                "the CommonRoad scenarios run CommonRoad's own tyre model; expected no tyre relaxation",
+            )
         if vehicle is not None:
             raise InputError(
                 f"scenario '{scenario}'",
@@ -119,6 +136,11 @@ def simulate(
     car = vehicle if vehicle is not None else load_vehicle(spec.vehicle)
     if duration_s is not None and not 1.0 <= float(duration_s) <= 6.0 * 3600.0:
         raise InputError(f"scenario '{scenario}'", f"duration {duration_s!r} s: expected 1 to 21600 s")
-    truth = scenarios.run_scenario(scenario, seed=int(seed), vehicle=car, dt=DT, duration_s=duration_s)
+    truth = scenarios.run_scenario(
+        scenario, seed=int(seed), vehicle=car, dt=DT, duration_s=duration_s, relaxation_m=relaxation
+    )
     ref = spec.vehicle if vehicle is None else _vehicle_ref(vehicle)
-    return drive_from_truth(truth, car, int(seed), cfg, scenario, ref)
+    drive = drive_from_truth(truth, car, int(seed), cfg, scenario, ref)
+    if relaxation:
+        drive = dataclasses.replace(drive, meta={**drive.meta, "tyre_relaxation_m": relaxation})
+    return drive

@@ -25,6 +25,7 @@ fall on the intended stretches (checked by the tests against the simulated truth
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
@@ -209,6 +210,7 @@ def run_scenario_full(
     vehicle: Vehicle | None = None,
     dt: float = 0.01,
     duration_s: float | None = None,
+    relaxation_m: float = 0.0,
 ) -> tuple[Truth, Diagnostics]:
     """Truth and model internals of scenario ``name`` (see :func:`run_scenario`)."""
     if name not in SCENARIOS:
@@ -217,7 +219,10 @@ def run_scenario_full(
     vehicle = vehicle if vehicle is not None else load_vehicle(scenario.vehicle)
     road, plan, rng = build_scenario(name, seed, vehicle)
     duration = scenario.duration_s if duration_s is None else float(duration_s)
-    return simulate_truth_full(vehicle, road, plan, duration, dt, rng, scenario.options)
+    options = scenario.options
+    if relaxation_m:
+        options = dataclasses.replace(options, relaxation_m=float(relaxation_m))
+    return simulate_truth_full(vehicle, road, plan, duration, dt, rng, options)
 
 
 def run_scenario(
@@ -226,10 +231,13 @@ def run_scenario(
     vehicle: Vehicle | None = None,
     dt: float = 0.01,
     duration_s: float | None = None,
+    relaxation_m: float = 0.0,
 ) -> Truth:
     """Truth of scenario ``name`` on the uniform grid 0, dt, ..., duration; deterministic per seed.
 
     ``vehicle`` defaults to the scenario's preset; ``duration_s`` shortens (or, where the road
-    is long enough, lengthens) the scenario.  Integration is RK4 at <= 2.5 ms internally.
+    is long enough, lengthens) the scenario; ``relaxation_m`` the tyres' relaxation length
+    (m, :class:`~sideslip.simulate.model_params.ModelOptions`).  Integration is RK4 at <= 2.5 ms
+    internally.
     """
-    return run_scenario_full(name, seed, vehicle, dt, duration_s)[0]
+    return run_scenario_full(name, seed, vehicle, dt, duration_s, relaxation_m)[0]

@@ -98,8 +98,8 @@ REQUIRED = (
 
 # states
 (X_E, X_N, X_YAW, X_VX, X_VY, X_R, X_PHI, X_PHID, X_DELTA, X_FX, X_FY, X_PITCH, X_IE, X_IV,
- X_VCMD) = range(15)  # fmt: skip
-N_STATES = 15
+ X_VCMD, X_ALPHA0) = range(16)  # fmt: skip
+N_STATES = 19  # X_ALPHA0 .. X_ALPHA0 + 3: each tyre's lagged slip angle (relaxation)
 # aux outputs of the derivative
 (A_AX, A_AY, A_WS0, A_WS1, A_WS2, A_WS3, A_SDOT, A_S, A_EY, A_BANK, A_GRADE, A_MU, A_DB, A_DG,
  A_Z, A_FY, A_ALF, A_ALR, A_VT) = range(19)  # fmt: skip
@@ -287,9 +287,18 @@ def _deriv(
         sd = math.sin(dl)
         vlong = vxi * cd + vyi * sd
         vlat = -vxi * sd + vyi * cd
-        alpha = -math.atan(vlat / math.sqrt(vlong * vlong + P.v_min * P.v_min))
+        v_reg = math.sqrt(vlong * vlong + P.v_min * P.v_min)
+        alpha = -math.atan(vlat / v_reg)
+        alpha_force = alpha
+        if P.relaxation_m > 0.0:
+            # the force follows the slip over one relaxation length of travel (Pacejka 2012,
+            # sec. 7.2, the first-order lag of the single contact point model)
+            alpha_force = x[X_ALPHA0 + i]
+            xdot[X_ALPHA0 + i] = v_reg / P.relaxation_m * (alpha - alpha_force)
+        else:
+            xdot[X_ALPHA0 + i] = 0.0
         peak = friction_peak(fz, mu, fz0, P.tyre_mu_load)
-        fy0 = lateral_force(alpha, fz, peak, ca0, fz0, P.tyre_c_y, P.tyre_e_y, P.tyre_load_exponent)
+        fy0 = lateral_force(alpha_force, fz, peak, ca0, fz0, P.tyre_c_y, P.tyre_e_y, P.tyre_load_exponent)
         # traction control / ABS with lateral priority: the drive force takes only what the
         # friction circle leaves beside the lateral force; braking keeps at least 30 %.
         cap = 0.95 * peak
