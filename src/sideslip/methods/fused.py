@@ -138,8 +138,15 @@ A sensor box the file misplaces moves antenna and IMU together, which neither ch
 the turns slower than ``box_speed_max_m_s`` the rear axle barely slides sideways, and there the
 Doppler puts the antenna against the rear axle (``check_box_lever``,
 :mod:`sideslip.methods.fused_box`, ``params["assumed"]["box_x"]``).
+A Doppler latency the tyre-free fits leave open (a short drive of a few turns at one speed)
+is profiled with the tyres (``profile_doppler_latency``, :mod:`sideslip.methods.fused_latency`):
+tyre-free a Doppler ``tau`` late reads in turns as an antenna ``v tau`` behind, so the late
+Doppler is one more explanation beside the installations, taken where its ``-2 log L`` beats
+the stamps' by the gate and every installation (``params["gnss_doppler_latency_tyres_*"]``);
+where an installation scores within the gate of it, that one's beta counts in full in
+``beta_std``.
 The causal filter, with ``whole_drive_calibration``, runs the smoother first and takes the
-antenna, the IMU or the box its checks found.
+antenna, the IMU, the box or the Doppler latency its checks found.
 
 Holes in the IMU inputs and pauses of the logger (rows missing; :mod:`sideslip.methods.input_gaps`):
 the smoother interpolates across a hole, the causal filter holds the last sample, a pause's
@@ -162,7 +169,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections.abc import Sequence
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -171,17 +178,30 @@ from sideslip import gnss
 from sideslip.calibrate.friction import drive_friction
 from sideslip.calibrate.result import Fitted
 from sideslip.calibrate.steer_yaw import steer_gyro_zero
-from sideslip.doppler_timing import antenna_geometry, choose_doppler_latency, doppler_fit
+from sideslip.doppler_timing import (
+    DECISIVE_SIGMA_S,
+    DopplerTiming,
+    antenna_geometry,
+    choose_doppler_latency,
+    doppler_fit,
+)  # fmt: skip
 from sideslip.drive import LONG_DRIVE_ROWS, Drive
 from sideslip.estimate import Estimate
 from sideslip.filters.consistency import nis_consistency
-from sideslip.gnss_latency import identify_latency
+from sideslip.gnss_latency import LatencyEstimate, identify_latency
 from sideslip.imu_lever import specific_force_at_cg
 from sideslip.methods import fused_engine as eng
 from sideslip.methods.fused_accel_offset import AccelOffset, lateral_accel_offset
 from sideslip.methods.fused_box import antenna_from_slow_turns
 from sideslip.methods.fused_bursts import burst_epochs
-from sideslip.methods.fused_lever import ImuAlternative, check_lever, imu_moved, without_tyres
+from sideslip.methods.fused_latency import LatencyProfile, profile_latency
+from sideslip.methods.fused_lever import (
+    ImuAlternative,
+    check_lever,
+    imu_moved,
+    likelihood_weights,
+    without_tyres,
+)  # fmt: skip
 from sideslip.methods.fused_settings import (
     FusedSettings,
     accel_noise_sigma,
@@ -492,7 +512,7 @@ def _gnss(drive: Drive, nz: FusedSettings, doppler_latency_s: float = 0.0) -> di
 
 def _doppler_latency(
     drive: Drive, nz: FusedSettings, params: dict[str, Any],
-    geometry: tuple[float, float, float] = (0.0, 0.0, 0.0),
+    geometry: tuple[float, float, float] = (0.0, 0.0, 0.0), timing: DopplerTiming | None = None,
 ) -> tuple[float, float]:
     """The GNSS Doppler's latency (s) the epochs are taken with, and the 1-sigma of what may
     remain: the tyre-free fits of :func:`sideslip.gnss_latency.identify_doppler_latency` (speed
@@ -501,7 +521,9 @@ def _doppler_latency(
     decide it (:func:`sideslip.doppler_timing.choose_doppler_latency`, with the prior
     N(0, ``doppler_latency_prior_sigma_s``) where they do not: slalom_low_mu 100 ms late reads
     +0.095 +- 0.016 s, kept at 0 before 2026-12-07 with sigma 0.088 s, now applied).  ``(0,
-    0)`` when switched off.
+    0)`` when switched off.  ``timing``: the epochs' timing decided elsewhere (the tyres'
+    profile of a latency the fits leave open, :mod:`sideslip.methods.fused_latency`), taken
+    instead of the fits' choice.
 
     A Doppler velocity stamped tau late lags the heading by r tau, which in a turn reads as
     sideslip: 50 ms cost step_steer 0.034 -> 0.445 deg beta RMSE with 19 % inside 2 sigma,
@@ -509,7 +531,8 @@ def _doppler_latency(
     if not nz.identify_doppler_latency or "gnss_ve" not in drive:
         return 0.0, 0.0
     est = doppler_fit(drive, geometry)
-    timing = choose_doppler_latency(est, nz.doppler_latency_prior_sigma_s)
+    if timing is None:
+        timing = choose_doppler_latency(est, nz.doppler_latency_prior_sigma_s)
     params["gnss_doppler_latency_note"] = timing.note
     if est is None:
         return timing.latency_s, timing.sigma_s
@@ -770,7 +793,7 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     """Run the fused EKF (and RTS smoother when ``smooth``); see the module docstring."""
     nz = settings or FusedSettings()
     if smooth:
-        return _checked_smoother(drive, vehicle, nz)[0]
+        return _checked_smoother(drive, vehicle, nz).est
     # the causal filter takes the installation (antenna, IMU, both) the smoother's checks find
     # (a calibration read from the whole drive, as its noise levels are): the checks need the
     # smoother's later samples, so the smoother runs first
@@ -779,7 +802,7 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
         and not nz.identify_doppler_lever and "gnss_ve" in drive and "gnss_e" in drive
     ):  # fmt: skip
         return _fuse(drive, vehicle, False, nz)
-    smoother_lever, spread = _checked_smoother(drive, vehicle, nz)
+    smoother_lever, spread, timing = _checked_smoother(drive, vehicle, nz)
     p = smoother_lever.params
     box = float(p.get("box_x_applied_m") or 0.0)
     imu_x = float(p.get("imu_lever_x_applied_m") or 0.0) + float(p.get("box_imu_x_m") or 0.0)
@@ -787,29 +810,37 @@ def fuse(drive: Drive, vehicle: Vehicle, smooth: bool, settings: FusedSettings |
     if box:
         x, y, z = (float(c) for c in vehicle.gnss_xyz)
         vehicle = dataclasses.replace(vehicle, gnss_xyz=(x + box, y, z))
-    est = _fuse(drive, vehicle, False, nz, smoother_lever)
+    est = _fuse(drive, vehicle, False, nz, smoother_lever, doppler_timing=timing)
     if spread is not None:
         series = {**est.series, "beta_std": np.hypot(est.series["beta_std"], spread)}
         est = dataclasses.replace(est, series=series)
     return est
 
 
-def _checked_smoother(
-    drive: Drive, vehicle: Vehicle, nz: FusedSettings
-) -> tuple[Estimate, FloatArray | None]:
-    """The smoother on the installation its checks settle on; and the slip (rad per row) that
-    the checks' doubt adds to ``beta_std`` (None: nothing added).
+class _Checked(NamedTuple):
+    """The smoother's estimate after its checks; the slip (rad per row) their doubt adds to
+    ``beta_std`` (None: nothing); the Doppler timing they took (None: the tyre-free fits')."""
 
-    First the antenna against the IMU (:func:`_imu_checked`), then both together from the
-    slow turns (:mod:`sideslip.methods.fused_box`): where those put the antenna beyond the
-    gate, antenna and IMU move by it and the smoother runs once more (its antenna pass off:
+    est: Estimate
+    spread: FloatArray | None
+    timing: DopplerTiming | None
+
+
+def _checked_smoother(drive: Drive, vehicle: Vehicle, nz: FusedSettings) -> _Checked:
+    """The smoother on the installation and the Doppler timing its checks settle on; and the
+    slip (rad per row) that the checks' doubt adds to ``beta_std`` (None: nothing added).
+
+    First the antenna against the IMU, and the Doppler's latency where the tyre-free fits
+    leave it open (:func:`_imu_checked`), then both together from the slow turns
+    (:mod:`sideslip.methods.fused_box`): where those put the antenna beyond the gate,
+    antenna and IMU move by it and the smoother runs once more (its antenna pass off:
     the place of the two against each other is the first check's), and the slow turns'
     sigma joins ``beta_std`` as ``sigma r / v``."""
-    est, spread = _imu_checked(drive, vehicle, nz)
+    est, spread, timing = _imu_checked(drive, vehicle, nz)
     if not (nz.check_box_lever and nz.check_doppler_lever):
         # the box check moves antenna and IMU as the relative check left them: without that
         # check their place against each other is not known
-        return est, spread
+        return _Checked(est, spread, timing)
     # the installation the checks settled on, and the relative offset none of them took
     p = est.params
     imu_x = float(p.get("imu_lever_x_applied_m") or 0.0)
@@ -833,7 +864,7 @@ def _checked_smoother(
         x, y, z = (float(c) for c in settled.gnss_xyz)
         moved = imu_moved(dataclasses.replace(settled, gnss_xyz=(x + box.d_m, y, z)), box.d_m - unresolved)
         nz_box = dataclasses.replace(nz, check_doppler_lever=False)
-        est = _fuse(drive, moved, True, nz_box)
+        est = _fuse(drive, moved, True, nz_box, doppler_timing=timing)
         extra["box_imu_x_m"] = box.d_m - unresolved
         # the place is known to its sigma: r sigma / v of slip
         slip = box.sigma_m * np.abs(est.series["r"]) / np.maximum(np.abs(est.series["vx"]), nz.axle_min_speed)
@@ -845,13 +876,49 @@ def _checked_smoother(
     params.update(extra)
     first = {k: p["assumed"][k] for k in ("gnss_lever_x", "imu_lever_x") if k in p["assumed"]}
     params["assumed"] = {**est.params["assumed"], **first, "box_x": note}
-    return dataclasses.replace(est, params=params), spread
+    return _Checked(dataclasses.replace(est, params=params), spread, timing)
 
 
-def _imu_checked(
-    drive: Drive, vehicle: Vehicle, nz: FusedSettings
-) -> tuple[Estimate, FloatArray | None]:
-    """The smoother with its antenna check and the IMU alternative.
+def _latency_left_open(drive: Drive, vehicle: Vehicle, nz: FusedSettings) -> LatencyEstimate | None:
+    """The tyre-free fit of the Doppler's latency where it leaves the latency open (not
+    applied, and not decisive that it is on time: :func:`choose_doppler_latency`), so that the
+    tyres' profile is asked (``profile_doppler_latency``); None otherwise."""
+    if not (nz.profile_doppler_latency and nz.identify_doppler_latency and "gnss_ve" in drive):
+        return None
+    fit = doppler_fit(drive, antenna_geometry(vehicle))
+    timing = choose_doppler_latency(fit, nz.doppler_latency_prior_sigma_s)
+    if fit is None or timing.latency_s != 0.0 or fit.sigma_s <= DECISIVE_SIGMA_S:
+        return None
+    return fit
+
+
+def _latency_profile(
+    drive: Drive, vehicle: Vehicle, nz: FusedSettings, fit: LatencyEstimate
+) -> LatencyProfile | None:
+    """The tyres' profile of the Doppler's latency (:mod:`sideslip.methods.fused_latency`):
+    each latency, the stamps' too, scored by a smoother run that stops at its Doppler
+    ``-2 log L`` (the antenna check off: the file's installation).  The Doppler's own check
+    against the inertial propagation is off in these runs: it lets different epochs in at
+    different latencies, and their ``-2 log L`` are then not of the same data (urban_highway
+    seed 2, on time, with 108 multipath epochs: 141 lower at 31 ms with the check, rising
+    from the stamps without it)."""
+    nz_score = dataclasses.replace(nz, check_doppler_lever=False, doppler_check=False)
+
+    def score(tau: float) -> float:
+        timing = DopplerTiming(tau, 0.0, "scored by the tyres' profile", fit)
+        run = _fuse(
+            drive, vehicle, True, nz_score, score_doppler=True, doppler_timing=timing, score_only=True
+        )
+        return float(run.params["gnss_doppler_neg2ll"])
+
+    return profile_latency(
+        score, score(0.0), fit, nz.latency_profile_sigmas, nz.latency_profile_step_s,
+        nz.latency_profile_points, nz.doppler_lever_z,
+    )  # fmt: skip
+
+
+def _imu_checked(drive: Drive, vehicle: Vehicle, nz: FusedSettings) -> _Checked:
+    """The smoother with its antenna check, the IMU alternative and a late Doppler.
 
     Where the smoother's tyre-free check put the antenna off the file's by ``dl_x``
     (:mod:`sideslip.methods.fused_lever`), the kinematics have said only that the antenna
@@ -859,36 +926,81 @@ def _imu_checked(
     file place explains the same.  The smoother is run twice more, with the antenna moved in
     the file and with the IMU moved (each with the noise it identifies itself, as the file's
     installation had), and their Doppler likelihoods with the tyres decide
-    (:class:`sideslip.methods.fused_lever.ImuAlternative`)."""
-    est = _fuse(drive, vehicle, True, nz)
+    (:class:`sideslip.methods.fused_lever.ImuAlternative`).
+
+    Where the tyre-free fits leave the Doppler's latency open (:func:`_latency_left_open`),
+    the tyres' profile of it (:func:`_latency_profile`) is one more explanation: tyre-free,
+    a Doppler ``tau`` late reads in turns as an antenna ``v tau`` behind.  Where it lowers the
+    Doppler's ``-2 log L`` below the stamps' by the gate and beats every installation, the
+    epochs are taken at that latency with the file's installation."""
+    open_fit = _latency_left_open(drive, vehicle, nz)
+    est = _fuse(drive, vehicle, True, nz, score_doppler=open_fit is not None)
     p = est.params
     pair = p.get("gnss_lever_x_neg2ll")
-    if not nz.check_imu_lever or pair is None:
-        return est, None
-    dl = float(p["gnss_lever_x_tyre_free_m"])
-    x, y, z = (float(c) for c in vehicle.gnss_xyz)
-    moved = dataclasses.replace(vehicle, gnss_xyz=(x + dl, y, z))
-    antenna = _fuse(drive, moved, True, nz, score_doppler=True)
-    alt = _fuse(drive, imu_moved(vehicle, -dl), True, nz, score_doppler=True)
-    verdict = ImuAlternative(
-        dl, float(pair[0]), float(antenna.params["gnss_doppler_neg2ll"]),
-        float(alt.params["gnss_doppler_neg2ll"]), bool(p["gnss_lever_x_applied_m"]),
-        nz.doppler_lever_z,
-    )  # fmt: skip
-    # the estimate of each installation: the check's own run stands for the one it settled on
-    runs = {"imu": alt, "antenna": est if verdict.antenna_applied else antenna, "file": est}
-    chosen = runs[verdict.chosen]
+    profile = None
+    late: Estimate | None = None
+    if open_fit is not None and "gnss_doppler_neg2ll" in p:
+        profile = _latency_profile(drive, vehicle, nz, open_fit)
+        if profile is not None and profile.found:
+            late = _fuse(drive, vehicle, True, nz, score_doppler=True, doppler_timing=profile.timing())
+    gate = nz.doppler_lever_z**2
+    runs: dict[str, Estimate]
+    if nz.check_imu_lever and pair is not None:
+        dl = float(p["gnss_lever_x_tyre_free_m"])
+        x, y, z = (float(c) for c in vehicle.gnss_xyz)
+        moved = dataclasses.replace(vehicle, gnss_xyz=(x + dl, y, z))
+        antenna = _fuse(drive, moved, True, nz, score_doppler=True)
+        alt = _fuse(drive, imu_moved(vehicle, -dl), True, nz, score_doppler=True)
+        verdict = ImuAlternative(
+            dl, float(pair[0]), float(antenna.params["gnss_doppler_neg2ll"]),
+            float(alt.params["gnss_doppler_neg2ll"]), bool(p["gnss_lever_x_applied_m"]),
+            nz.doppler_lever_z,
+            math.inf if late is None else float(late.params["gnss_doppler_neg2ll"]),
+        )  # fmt: skip
+        # the estimate of each installation: the check's own run stands for the one it settled on
+        runs = {"imu": alt, "antenna": est if verdict.antenna_applied else antenna, "file": est}
+        if late is not None:
+            runs["latency"] = late
+        name, weights = verdict.chosen, verdict.weights()
+        neg2ll = {"imu": verdict.neg2ll_imu, "antenna": verdict.neg2ll_antenna, "file": verdict.neg2ll_file}
+        neg2ll["latency"] = verdict.neg2ll_latency
+        extra: dict[str, Any] = verdict.params()
+        notes = {"imu_lever_x": verdict.note()}
+        del antenna, alt
+    elif late is not None:
+        # the file's installation (or the antenna the check moved) against the Doppler late
+        n_est, n_late = float(p["gnss_doppler_neg2ll"]), float(late.params["gnss_doppler_neg2ll"])
+        n_file = float(pair[0]) if pair is not None else n_est
+        name = "latency" if (n_file - n_late > gate and n_late < n_est) else "file"
+        runs = {"file": est, "latency": late}
+        neg2ll = {"file": n_est, "latency": n_late}
+        weights = likelihood_weights(neg2ll)
+        extra, notes = {}, {}
+    else:
+        if profile is not None:
+            est = dataclasses.replace(est, params={**p, **profile.params()})
+        return _Checked(est, None, None)
+    chosen = runs[name]
     beta = chosen.series["beta"]
     spread_sq = np.zeros_like(beta)
-    for key, weight in verdict.weights().items():
-        if key != verdict.chosen and runs[key] is not chosen:
-            spread_sq += weight * np.square(runs[key].series["beta"] - beta)
-    del runs, antenna, alt, est
+    for key, weight in weights.items():
+        if key != name and runs[key] is not chosen:
+            # a late Doppler against an installation: where the two are within the gate of
+            # each other the tyres have not told them apart (imu:two_turns_gyro_sf, the IMU
+            # 1 m ahead: the Doppler 36 ms late scored 5.5 below it), and the other's beta
+            # counts in full; otherwise by its likelihood weight
+            close = "latency" in (key, name) and neg2ll[key] - neg2ll[name] <= gate
+            spread_sq += (1.0 if close else weight) * np.square(runs[key].series["beta"] - beta)
+    del runs, est, late
     spread = np.sqrt(spread_sq)
-    params = {**chosen.params, **verdict.params()}
-    params["assumed"] = {**chosen.params["assumed"], "imu_lever_x": verdict.note()}
+    params = {**chosen.params, **extra}
+    if profile is not None:
+        params.update(profile.params())
+        params["gnss_doppler_latency_tyres_weight"] = float(weights.get("latency", 0.0))
+    params["assumed"] = {**chosen.params["assumed"], **notes}
     series = {**chosen.series, "beta_std": np.hypot(chosen.series["beta_std"], spread)}
-    return dataclasses.replace(chosen, series=series, params=params), spread
+    timing = profile.timing() if (profile is not None and name == "latency") else None
+    return _Checked(dataclasses.replace(chosen, series=series, params=params), spread, timing)
 
 
 def _fuse(
@@ -898,11 +1010,15 @@ def _fuse(
     nz: FusedSettings,
     smoother_lever: Estimate | None = None,
     score_doppler: bool = False,
+    doppler_timing: DopplerTiming | None = None,
+    score_only: bool = False,
 ) -> Estimate:
     """:func:`fuse` with its settings; the causal filter with ``smoother_lever``, the
     smoother's estimate whose antenna check it takes; ``score_doppler``: the smoother
     reports the Doppler's ``-2 log L`` with the tyres at its final antenna
-    (``params["gnss_doppler_neg2ll"]``)."""
+    (``params["gnss_doppler_neg2ll"]``), and with ``score_only`` returns as soon as it has it
+    (an estimate without series); ``doppler_timing``: the Doppler epochs' timing decided
+    by the caller (:func:`_doppler_latency`)."""
     if not smooth and not nz.whole_drive_calibration:
         # strictly on-line: the file's roll gain, the receiver's stamps, the prior noise and
         # c_y a random walk (the roll gyro's bias would need the whole drive)
@@ -929,7 +1045,7 @@ def _fuse(
     dop_params: dict[str, Any] = {}
     # the antenna ahead of and above the IMU, and the rear axle behind the CG (m)
     geometry = antenna_geometry(vehicle)
-    doppler_latency = _doppler_latency(drive, nz, dop_params, geometry)
+    doppler_latency = _doppler_latency(drive, nz, dop_params, geometry, doppler_timing)
     gn = _gnss(drive, nz, doppler_latency[0])
     has_pos, has_vel = bool(gn["has_pos"]), bool(gn["has_vel"])
     # latency and lever arm as states: on positions-only drives with identify_gnss_calibration;
@@ -1240,6 +1356,8 @@ def _fuse(
     doppler_score = None
     if score_doppler and has_vel:
         doppler_score = _doppler_neg2ll(before, g_age, after, (float(lever[0]),))[0]
+        if score_only:
+            return Estimate("fused", t, {}, {"gnss_doppler_neg2ll": doppler_score})
     xs, var, var_last, cov_vxvy, nis, counts = eng.run_nodes(*before, g_age, *after)
     if smooth and has_vel and nz.doppler_burst_check:
         # a multipath burst the forward check let in stands out from the smoothed track

@@ -48,7 +48,9 @@ from sideslip.methods import fused_engine as eng
 from sideslip.models.fused_process import ILX, ILY, ITAU, IVX, NX_CORE, NX_GNSS_CAL, f_rows
 from sideslip.vehicle import Vehicle
 
-__all__ = ["ImuAlternative", "LeverCheck", "check_lever", "imu_moved", "without_tyres"]
+__all__ = [
+    "ImuAlternative", "LeverCheck", "check_lever", "imu_moved", "likelihood_weights", "without_tyres",
+]  # fmt: skip
 
 # the axle relations' residual floor (m/s^2) that takes the tyres out of the pass: a million
 # times any lateral acceleration, so they carry no information on v_y
@@ -148,35 +150,54 @@ class ImuAlternative:
     neg2ll_imu: float
     antenna_applied: bool
     z_gate: float
+    # the same with the installation the file's and the Doppler epochs taken at the latency
+    # the tyres' profile found (sideslip.methods.fused_latency; inf: none found)
+    neg2ll_latency: float = math.inf
 
     @property
     def applied(self) -> bool:
         """The IMU moved."""
         gain = self.neg2ll_file - self.neg2ll_imu
-        return bool(gain > self.z_gate**2 and self.neg2ll_imu < self.neg2ll_antenna)
+        best = min(self.neg2ll_antenna, self.neg2ll_latency)
+        return bool(gain > self.z_gate**2 and self.neg2ll_imu < best)
+
+    @property
+    def latency_applied(self) -> bool:
+        """The late Doppler explains the offset best: installation as the file says, the
+        epochs taken at the tyres' latency."""
+        gain = self.neg2ll_file - self.neg2ll_latency
+        best = min(self.neg2ll_antenna, self.neg2ll_imu)
+        return bool(gain > self.z_gate**2 and self.neg2ll_latency < best)
 
     @property
     def chosen(self) -> str:
-        """``"imu"``, ``"antenna"`` or ``"file"``: the installation the estimate takes."""
+        """``"latency"``, ``"imu"``, ``"antenna"`` or ``"file"``: the explanation the estimate
+        takes."""
+        if self.latency_applied:
+            return "latency"
         return "imu" if self.applied else ("antenna" if self.antenna_applied else "file")
 
     def weights(self) -> dict[str, float]:
-        """Each installation's share of the likelihood (the file's not where the antenna moved)."""
+        """Each explanation's share of the likelihood (the file's not where the antenna moved)."""
         n = {"antenna": self.neg2ll_antenna, "imu": self.neg2ll_imu}
+        if math.isfinite(self.neg2ll_latency):
+            n["latency"] = self.neg2ll_latency
         if not self.antenna_applied:
             n["file"] = self.neg2ll_file
-        low = min(n.values())
-        w = {k: math.exp(-(v - low) / 2.0) for k, v in n.items()}
-        total = sum(w.values())
-        return {k: v / total for k, v in w.items()}
+        return likelihood_weights(n)
 
     def note(self) -> str:
         others = ", ".join(f"{k} {v:.2f}" for k, v in self.weights().items() if k != self.chosen)
+        late = ""
+        if math.isfinite(self.neg2ll_latency):
+            late = f", {self.neg2ll_imu - self.neg2ll_latency:+.1f} against the Doppler late"
         versus = (
             f"with the tyres -2 log L of the Doppler {self.neg2ll_imu - self.neg2ll_file:+.1f} against "
-            f"the file's, {self.neg2ll_imu - self.neg2ll_antenna:+.1f} against the antenna moved; "
+            f"the file's, {self.neg2ll_imu - self.neg2ll_antenna:+.1f} against the antenna moved{late}; "
             f"likelihood weights of the others: {others}"
         )
+        if self.latency_applied:
+            return f"the file's kept: the Doppler late explains the offset better ({versus})"
         if self.applied:
             return f"moved {-self.dl_x_m:+.3f} m (the tyre-free offset read as the IMU's; {versus})"
         return f"the file's kept (the IMU {-self.dl_x_m:+.3f} m: {versus})"
@@ -187,6 +208,15 @@ class ImuAlternative:
             "imu_lever_x_neg2ll": self.neg2ll_imu,
             "imu_lever_x_weights": self.weights(),
         }
+
+
+def likelihood_weights(neg2ll: dict[str, float]) -> dict[str, float]:
+    """Each explanation's share ``exp(-n / 2)`` (normalised) of the likelihood, from its
+    ``-2 log L`` ``n``."""
+    low = min(neg2ll.values())
+    w = {k: math.exp(-(v - low) / 2.0) for k, v in neg2ll.items()}
+    total = sum(w.values())
+    return {k: v / total for k, v in w.items()}
 
 
 def without_tyres(after: tuple[Any, ...]) -> tuple[Any, ...]:

@@ -359,6 +359,17 @@ class FusedSettings:
     # fused._doppler_latency) enters beta_std.  0.03 s left step_steer 100 ms late with 20 %
     # of its errors inside 2 sigma (doppler_latency.md)
     doppler_latency_prior_sigma_s: float = 0.05
+    # where those fits leave the latency open (not applied, not decisive that it is on time),
+    # the smoother profiles it with the tyres: the Doppler's -2 log L with the epochs taken tau
+    # before their stamps, over the fits' estimate +- latency_profile_sigmas sigma in steps of
+    # latency_profile_step_s (at most latency_profile_points runs before the extension and the
+    # refinement), and takes the minimum where it beats the stamps by doppler_lever_z^2 and
+    # every installation the antenna check proposes (sideslip.methods.fused_latency).
+    # Measured: doppler_latency.md (the late cells the fits left open) and fused_accuracy.md
+    profile_doppler_latency: bool = True
+    latency_profile_sigmas: float = 2.5
+    latency_profile_step_s: float = 0.05
+    latency_profile_points: int = 5
     # positions only: how long one unidentified latency / lever-arm offset of the fixes lasts
     # for the noise model (its variance times the fixes in this span, at least one: a span
     # shorter than the fix interval counts it as white).  The offset is the receiver's and the
