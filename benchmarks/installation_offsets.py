@@ -6,10 +6,12 @@ installation off the file's along x: the antenna 0.5 m ahead / behind
 ahead / behind (the IMU moved in the simulated car; the 11 own scenarios, as the CommonRoad
 model takes no IMU place), and everything where the file says.  Three vehicle files each
 (``compare_methods.FILES``).  ``fused`` with its installation checks (the default: the
-antenna's tyre-free check, ``check_imu_lever``, ``check_box_lever``) against the same with
-the IMU and box checks off (``check_doppler_lever`` kept: the antenna's rule as before).  Per
-grid: the cells where a check moved the IMU or the box, the mean beta RMSE (deg, rows faster
-than 5 m/s) without and with the checks, the lowest 2-sigma share, and the cell made worst.
+antenna's tyre-free check, ``check_imu_lever``, ``check_box_lever``, and the tyres' profile of
+a Doppler latency the tyre-free fits leave open, ``profile_doppler_latency``, which competes
+with the installations) against the same with the IMU, box and latency checks off
+(``check_doppler_lever`` kept: the antenna's rule as before).  Per grid: the cells where a
+check moved the IMU or the box or took a latency, the mean beta RMSE (deg, rows faster than
+5 m/s) without and with the checks, the lowest 2-sigma share, and the cell made worst.
 Writes ``benchmarks/results/installation_offsets.md``.
 Run: ``.venv/bin/python benchmarks/installation_offsets.py``.
 """
@@ -32,7 +34,7 @@ from sideslip.simulate.run import _lookup  # the scenario's own sensor overrides
 from sideslip.vehicle import load_vehicle
 
 OUT = Path(__file__).parent / "results" / "installation_offsets.md"
-OFF = FusedSettings(check_imu_lever=False, check_box_lever=False)
+OFF = FusedSettings(check_imu_lever=False, check_box_lever=False, profile_doppler_latency=False)
 # grid -> (what is off, offset m)
 GRIDS = {
     "where the file says": ("antenna", 0.0),
@@ -45,9 +47,9 @@ GRIDS = {
 }
 
 
-def _cell(task: tuple[str, str, float]) -> list[tuple[str, float, float, float, float, bool]]:
+def _cell(task: tuple[str, str, float]) -> list[tuple[str, float, float, float, float, bool, str]]:
     """One scenario of one grid, every vehicle file: (file, beta off, share off, beta on,
-    share on, whether a check moved the IMU or the box)."""
+    share on, whether a check moved the IMU or the box or took a latency, which)."""
     name, kind, offset = task
     cfg = SensorConfig().with_overrides(_lookup(name).sensor_overrides)
     if kind == "antenna":
@@ -64,11 +66,15 @@ def _cell(task: tuple[str, str, float]) -> list[tuple[str, float, float, float, 
         vehicle = make(right)
         on = fuse(drive, vehicle, smooth=True)
         p = on.params
-        moved = bool(p.get("imu_lever_x_applied_m") or p.get("box_x_applied_m"))
+        late = "the tyre-free fits left it open" in str(p.get("gnss_doppler_latency_note", ""))
+        moved = bool(p.get("imu_lever_x_applied_m") or p.get("box_x_applied_m") or late)
         off = fuse(drive, vehicle, smooth=True, settings=OFF) if moved else on
         beta = [metrics(drive, e.series)["beta_rmse_deg"] for e in (off, on)]
         share = [two_sigma_share(drive, e) or 0.0 for e in (off, on)]
-        rows.append((key, beta[0], share[0], beta[1], share[1], moved))
+        what = [k for k, v in (("IMU", p.get("imu_lever_x_applied_m")), ("box", p.get("box_x_applied_m"))) if v]
+        if late:
+            what.append(f"Doppler {1000.0 * float(p['gnss_doppler_latency_s']):.0f} ms late")
+        rows.append((key, beta[0], share[0], beta[1], share[1], moved, ", ".join(what)))
     return rows
 
 
@@ -83,7 +89,7 @@ def main() -> None:
     with ProcessPoolExecutor(max_workers=2) as pool:
         results = list(pool.map(_cell, [t for _, t in tasks]))
     body = [
-        "| installation against the file | cells | IMU or box moved | mean beta without -> with the checks "
+        "| installation against the file | cells | IMU or box moved, latency taken | mean beta without -> with the checks "
         "| lowest 2-sigma share without -> with | the cell made worst (deg) |",
         "|---|---:|---:|---|---|---|",
     ]
@@ -106,9 +112,11 @@ def main() -> None:
             f"| {min(c[3] for c in cells):.2f} -> {min(c[5] for c in cells):.2f} | {worse} |"
         )
         moved_lines += [
-            f"- {grid}, {c[0]}, {c[1]} file: {c[2]:.3f} ({c[3]:.2f}) -> {c[4]:.3f} ({c[5]:.2f})" for c in moved
+            f"- {grid}, {c[0]}, {c[1]} file: {c[2]:.3f} ({c[3]:.2f}) -> {c[4]:.3f} ({c[5]:.2f}); {c[7]}"
+            for c in moved
         ]
-    body += ["", "Cells where a check moved the IMU or the box (beta RMSE deg, 2-sigma share):", "", *moved_lines, ""]
+    body += ["", "Cells where a check moved the IMU or the box or took a latency (beta RMSE deg, 2-sigma share):",
+             "", *moved_lines, ""]
     intro = __doc__.split("\n\n")[1].replace("\n", " ").split(" Writes ")[0]
     write_result(OUT, "Sensors the vehicle file misplaces", "benchmarks/installation_offsets.py",
                  time.perf_counter() - start, intro, body)  # fmt: skip
