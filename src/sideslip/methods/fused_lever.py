@@ -142,7 +142,13 @@ class ImuAlternative:
     The installations' likelihood weights (:meth:`weights`: ``exp(-n / 2)`` normalised, the
     file's left out where the antenna was moved, as it was there beaten beyond the gate)
     put the others' beta, weighted, into ``beta_std``: where the Doppler hardly tells them
-    apart the sigma covers both."""
+    apart the sigma covers both.
+
+    ``neg2ll_latency``: one more explanation, the installation as the file says with the
+    Doppler late by the latency the tyres' profile found (:mod:`sideslip.methods.fused_latency`;
+    tyre-free a Doppler ``tau`` late reads in turns as an antenna ``v tau`` behind).  Taken
+    where it beats the file's by ``z_gate^2`` and every installation
+    (:attr:`latency_applied`), which it must also be beaten by for the IMU to move."""
 
     dl_x_m: float
     neg2ll_file: float

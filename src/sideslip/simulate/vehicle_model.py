@@ -4,7 +4,9 @@ This is deliberately richer than any estimator's model (never the linear single-
 
 * Planar motion (longitudinal, lateral, yaw) of the whole vehicle, four wheels at their track
   positions, front steering (parallel, no Ackermann), per-tyre Pacejka Magic Formula forces
-  with load sensitivity and a friction-ellipse combined slip (:mod:`sideslip.simulate.tyre`);
+  with load sensitivity and a friction-ellipse combined slip (:mod:`sideslip.simulate.tyre`),
+  optionally built over a relaxation length of travel (``ModelOptions.relaxation_m``: each
+  tyre's slip angle through a first-order lag of that length over its speed; 0 by default);
   drive forces are limited to what the friction circle leaves beside the lateral force
   (traction control), brake forces likewise but keep at least 30 % of the peak (ABS).
 * Normal loads with longitudinal load transfer ``m f_x h_cg / L`` and lateral load transfer per
@@ -37,9 +39,10 @@ This is deliberately richer than any estimator's model (never the linear single-
   regularised by ``v / sqrt(v^2 + 0.1^2)``; when the driver holds the brake at rest the vehicle
   is held exactly (static friction).  Reversing works with open-loop plans.
 
-State vector x (15): E, N (m, CG in ENU), yaw (rad), vx, vy (m/s, heading frame), r (rad/s),
+State vector x (19): E, N (m, CG in ENU), yaw (rad), vx, vy (m/s, heading frame), r (rad/s),
 phi_sus (rad), phi_sus' (rad/s), delta (road-wheel steer, rad), f_x, f_y filtered (m/s^2),
-pitch_sus (rad), driver integrals (lateral offset m s, speed m), driver speed command (m/s).
+pitch_sus (rad), driver integrals (lateral offset m s, speed m), driver speed command (m/s),
+and the four tyres' lagged slip angles (rad; constant 0 without relaxation).
 Integration: classical RK4 at a step of at most 2.5 ms (smaller for stiff tyres at v_min),
 output every ``dt``; the loop is compiled with numba.
 """
