@@ -137,7 +137,12 @@ beta, by their likelihood weight, to ``beta_std`` (``params["assumed"]["imu_leve
 A sensor box the file misplaces moves antenna and IMU together, which neither check sees; in
 the turns slower than ``box_speed_max_m_s`` the rear axle barely slides sideways, and there the
 Doppler puts the antenna against the rear axle (``check_box_lever``,
-:mod:`sideslip.methods.fused_box`, ``params["assumed"]["box_x"]``).
+:mod:`sideslip.methods.fused_box`, ``params["assumed"]["box_x"]``).  Without such turns (a
+race lap, a highway) the Doppler's likelihood with the tyres profiles the box's place
+(``profile_box_lever``, :mod:`sideslip.methods.fused_box_profile`): moved to the minimum where
+that beats the file's place by the gate on a drive without multipath bursts, otherwise kept
+with the profile's doubt, ``hypot(sigma, d_min) |r| / v``, in ``beta_std``
+(``params["box_x_tyres_*"]``).
 A Doppler latency the tyre-free fits leave open (a short drive of a few turns at one speed)
 is profiled with the tyres (``profile_doppler_latency``, :mod:`sideslip.methods.fused_latency`):
 tyre-free a Doppler ``tau`` late reads in turns as an antenna ``v tau`` behind, so the late
@@ -193,6 +198,7 @@ from sideslip.imu_lever import specific_force_at_cg
 from sideslip.methods import fused_engine as eng
 from sideslip.methods.fused_accel_offset import AccelOffset, lateral_accel_offset
 from sideslip.methods.fused_box import antenna_from_slow_turns
+from sideslip.methods.fused_box_profile import BoxProfile, profile_box
 from sideslip.methods.fused_bursts import burst_epochs
 from sideslip.methods.fused_latency import LatencyProfile, profile_latency
 from sideslip.methods.fused_lever import (
@@ -835,7 +841,9 @@ def _checked_smoother(drive: Drive, vehicle: Vehicle, nz: FusedSettings) -> _Che
     (:mod:`sideslip.methods.fused_box`): where those put the antenna beyond the gate,
     antenna and IMU move by it and the smoother runs once more (its antenna pass off:
     the place of the two against each other is the first check's), and the slow turns'
-    sigma joins ``beta_std`` as ``sigma r / v``."""
+    sigma joins ``beta_std`` as ``sigma r / v``.  Without slow turns the tyres' profile of the
+    box (:func:`_box_profile`) moves the two the same way where it decides, and otherwise its
+    doubt joins ``beta_std`` the same way."""
     est, spread, timing = _imu_checked(drive, vehicle, nz)
     if not (nz.check_box_lever and nz.check_doppler_lever):
         # the box check moves antenna and IMU as the relative check left them: without that
@@ -858,25 +866,88 @@ def _checked_smoother(drive: Drive, vehicle: Vehicle, nz: FusedSettings) -> _Che
     )  # fmt: skip
     extra: dict[str, Any] = box.params()
     note = box.note()
-    if box.applied:
+    # no slow turns: the Doppler with the tyres profiles the box (fused_box_profile)
+    bursts = int(p.get("gnss_doppler_burst_epochs") or 0)
+    profile = None
+    if not math.isfinite(box.sigma_m):
+        profile = _box_profile(drive, settled, nz, timing, bursts, unresolved)
+    if profile is not None:
+        extra.update(profile.params())
+        note = f"{note}; {profile.note()}"
+    if box.applied or (profile is not None and profile.applied):
         # the antenna by d; the IMU by d less the relative offset the tyre-free pass found and
-        # no check took (antenna and IMU keep the place against each other the pass saw)
+        # no check took (antenna and IMU keep the place against each other the pass saw; the
+        # profile scored them so)
+        if box.applied:
+            d, sigma_m = box.d_m, box.sigma_m
+        else:
+            assert profile is not None
+            d, sigma_m = profile.d_m, profile.spread_m
+        imu_d = d - unresolved
         x, y, z = (float(c) for c in settled.gnss_xyz)
-        moved = imu_moved(dataclasses.replace(settled, gnss_xyz=(x + box.d_m, y, z)), box.d_m - unresolved)
+        moved = imu_moved(dataclasses.replace(settled, gnss_xyz=(x + d, y, z)), imu_d)
         nz_box = dataclasses.replace(nz, check_doppler_lever=False)
         est = _fuse(drive, moved, True, nz_box, doppler_timing=timing)
-        extra["box_imu_x_m"] = box.d_m - unresolved
+        extra["box_x_applied_m"] = d
+        extra["box_imu_x_m"] = imu_d
         # the place is known to its sigma: r sigma / v of slip
-        slip = box.sigma_m * np.abs(est.series["r"]) / np.maximum(np.abs(est.series["vx"]), nz.axle_min_speed)
+        slip = _box_slip(est, sigma_m, nz)
         spread = slip if spread is None else np.hypot(spread, slip)
         series = {**est.series, "beta_std": np.hypot(est.series["beta_std"], spread)}
         est = dataclasses.replace(est, series=series)
+    elif profile is not None and profile.spread_m > 0.0:
+        # kept where the file says, as doubtful as the profile leaves it (est's beta_std
+        # already carries the first checks' spread)
+        slip = _box_slip(est, profile.spread_m, nz)
+        spread = slip if spread is None else np.hypot(spread, slip)
+        series = {**est.series, "beta_std": np.hypot(est.series["beta_std"], slip)}
+        est = dataclasses.replace(est, series=series)
     # the first checks' findings stay in the params (the run above had them switched off)
-    params = {**est.params, **{k: v for k, v in p.items() if k.startswith(("gnss_lever_x_", "imu_lever_x_"))}}
+    kept = ("gnss_lever_x_", "imu_lever_x_", "gnss_doppler_latency_tyres_")
+    params = {**est.params, **{k: v for k, v in p.items() if k.startswith(kept)}}
     params.update(extra)
     first = {k: p["assumed"][k] for k in ("gnss_lever_x", "imu_lever_x") if k in p["assumed"]}
     params["assumed"] = {**est.params["assumed"], **first, "box_x": note}
     return _Checked(dataclasses.replace(est, params=params), spread, timing)
+
+
+def _box_slip(est: Estimate, sigma_m: float, nz: FusedSettings) -> FloatArray:
+    """The slip (rad per row) of a box place known to ``sigma_m``: ``sigma r / v``."""
+    return sigma_m * np.abs(est.series["r"]) / np.maximum(np.abs(est.series["vx"]), nz.axle_min_speed)
+
+
+def _box_profile(
+    drive: Drive,
+    vehicle: Vehicle,
+    nz: FusedSettings,
+    timing: DopplerTiming | None,
+    bursts: int,
+    unresolved: float,
+) -> BoxProfile | None:
+    """The tyres' profile of the box's place (:mod:`sideslip.methods.fused_box_profile`):
+    the antenna of ``vehicle`` (the installation the first checks settled on) moved by ``d``
+    and its IMU by ``d - unresolved`` (the antenna's offset from the IMU that the tyre-free
+    pass found and no check took), each place scored by a smoother run that stops at its
+    Doppler ``-2 log L``, with the Doppler's checks off as in :func:`_latency_profile`
+    (``bursts``: the epochs the file's run found in multipath bursts, which then score too);
+    None where switched off or the drive has no Doppler to score."""
+    if not nz.profile_box_lever or "gnss_ve" not in drive:
+        return None
+    nz_score = dataclasses.replace(nz, check_doppler_lever=False, doppler_check=False)
+
+    def score(d: float, imu_d: float) -> float:
+        x, y, z = (float(c) for c in vehicle.gnss_xyz)
+        moved = imu_moved(dataclasses.replace(vehicle, gnss_xyz=(x + d, y, z)), imu_d)
+        run = _fuse(drive, moved, True, nz_score, score_doppler=True, doppler_timing=timing, score_only=True)
+        return float(run.params.get("gnss_doppler_neg2ll", math.nan))
+
+    at_file = score(0.0, 0.0)
+    if not math.isfinite(at_file):
+        return None
+    return profile_box(
+        lambda d: score(d, d - unresolved), at_file, nz.box_profile_step_m, nz.box_profile_max_m,
+        nz.doppler_lever_z, bursts, None if unresolved == 0.0 else score(0.0, -unresolved),
+    )  # fmt: skip
 
 
 def _latency_left_open(drive: Drive, vehicle: Vehicle, nz: FusedSettings) -> LatencyEstimate | None:

@@ -339,6 +339,15 @@ class FusedSettings:
     box_accel_max_m_s2: float = 3.0
     box_block_s: float = 10.0
     box_min_blocks: int = 5
+    # with Doppler (smoother) and no slow turns to judge the box by: the Doppler's -2 log L
+    # with the tyres, the box (antenna and IMU together) moved by d along x, scored from 0
+    # outwards in steps of box_profile_step_m while within doppler_lever_z^2 of the lowest
+    # (at most box_profile_max_m out); moved to the minimum where that beats the file's place
+    # by doppler_lever_z^2, else kept with the profile's doubt (the minimum's distance and
+    # sigma, times |r| / v) in beta_std (sideslip.methods.fused_box_profile)
+    profile_box_lever: bool = True
+    box_profile_step_m: float = 0.5
+    box_profile_max_m: float = 2.0
     # positions only: the receiver's latency from the fixes' speed against the wheels
     # (sideslip.gnss_latency; tyre-free, so slip cannot pass for delay), combined with the
     # prior N(0, latency_prior_sigma_s); the prior's noise stays on the positions.  The
