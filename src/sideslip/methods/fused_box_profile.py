@@ -72,8 +72,8 @@ class BoxProfile:
         """How far ``-2 log L`` falls to the minimum from the better of the file's place and
         the scan's 0: where the scan keeps an antenna-IMU offset the antenna check left
         undecided, its 0 is that check's IMU alternative, and a box move must beat that too
-        (two_turns_gyro_sf with the IMU 1 m behind: antenna moved and IMU moved 32 and 31
-        below the file's and within 2 of each other, so the check kept the file's; read
+        (two_turns_gyro_sf with the IMU 1 m behind: antenna moved and IMU moved 33.5 and 32.2
+        below the file's and 1.3 apart, so the check kept the file's; read
         against the file's alone, the box moved by +0.5 m between the two took beta from 0.062
         to 0.235 deg)."""
         return min(self.neg2ll_file, dict(self.scan)[0.0]) - min(n for _, n in self.scan)
