@@ -55,6 +55,19 @@ def test_a_flat_profile_is_scanned_to_its_reach_and_its_doubt_is_kept():
     assert "kept, its doubt (0.71 m) in beta_std" in prof.note()
 
 
+def test_each_side_is_scanned_however_far_the_other_fell():
+    """A profile measured on the race lap (box 1 m ahead, rough file, the scan keeping the
+    antenna check's reading between antenna and IMU; -2 log L less the file's, linear in
+    between): the side scanned first falls by 31 at -0.5 m, which puts the scan's 0 outside
+    the gate of the lowest; the other side must still be scanned, and it falls by 79 at
+    +1 m, the box's true place."""
+    places = [-1.0, -0.5, 0.0, 0.5, 1.0, 1.5, 2.0]
+    neg2ll = [49.4, -31.4, -11.2, -76.7, -78.9, -59.6, 0.0]
+    prof, asked = _profile(lambda d: float(np.interp(d, places, neg2ll)))
+    assert {0.5, 1.0, 1.5} <= set(asked)
+    assert abs(prof.d_m - 1.0) < 0.25 and prof.applied
+
+
 def test_a_minimum_inside_the_gate_counts_its_distance_in_the_doubt():
     """-2 log L = 4 (d - 0.5)^2 - 1: the minimum 0.5 m ahead is 1 below the file's place,
     inside the gate: kept, with the doubt hypot(sigma 0.5, distance 0.5)."""
@@ -108,16 +121,18 @@ def test_a_box_ahead_on_the_race_lap_is_found_by_the_tyres_and_moved():
     """The simulated race lap (no turn below 9 m/s: the slow-turn check does not judge) with
     IMU and antenna 1 m ahead of where the file says.  Without the profile the smoother reads
     r d / v as slip: 0.619 deg with 69 % of its errors inside 2 sigma (measured).  The Doppler
-    with the tyres falls by 64-71 at +1 m (measured); the box moves to +1.09 m (measured;
-    bound: the truth within 0.25 m, half the scan's step) and beta falls under 0.15 deg
-    (measured 0.072) with at least 95 % inside 2 sigma (measured 100 %).  The causal filter
-    takes the same installation."""
+    with the tyres falls by 85 at +0.84 m, 51 below the scan's 0 (measured); the box moves to
+    +0.84 m (measured; bound: the truth within 0.25 m, half the scan's step) and beta falls
+    under 0.15 deg (measured 0.101) with at least 95 % inside 2 sigma (measured 100 %).  The
+    causal filter takes the same installation."""
     drive, vehicle = _box_misplaced("race_lap", 1.0)
     before = fuse(drive, vehicle, smooth=True, settings=OFF)
     est = fuse(drive, vehicle, smooth=True)
     p = est.params
     assert abs(p["box_x_applied_m"] - 1.0) < 0.25, p["box_x_applied_m"]
-    assert p["box_imu_x_m"] == p["box_x_applied_m"] == p["box_x_tyres_m"]
+    assert p["box_x_applied_m"] == p["box_x_tyres_m"]
+    # the IMU keeps the antenna check's reading against the antenna (+0.097 m, measured)
+    assert p["box_imu_x_m"] == p["box_x_applied_m"] - p["gnss_lever_x_tyre_free_m"]
     assert "antenna and IMU moved by it" in p["assumed"]["box_x"]
     rmse = [metrics(drive, e.series)["beta_rmse_deg"] for e in (before, est)]
     assert rmse[1] < 0.15 < 0.5 < rmse[0], rmse
@@ -128,10 +143,11 @@ def test_a_box_ahead_on_the_race_lap_is_found_by_the_tyres_and_moved():
 
 def test_a_box_behind_on_the_race_lap_is_not_found_but_its_doubt_is_carried():
     """The race lap with IMU and antenna 1 m behind the file's place: the tyres' profile is
-    flat within 7 from -1 to +1 m (measured), so nothing moves and beta stays 0.648 deg
-    (measured) but beta_std carries the profile's doubt (0.54 m times |r| / v): the errors
-    inside 2 sigma go from 74 % (measured) to at least 90 % (measured 100 %).  With the file
-    right the lap stays as it was (0.028 deg) with its doubt no wider than 0.5 m."""
+    shallow (lowest at -0.8 m, 7.9 below the scan's 0; measured), so nothing moves and beta
+    stays 0.648 deg (measured) but beta_std carries the profile's doubt (0.82 m times
+    |r| / v): the errors inside 2 sigma go from 74 % (measured) to at least 90 % (measured
+    100 %).  With the file right the lap stays as it was (0.028 deg) with its doubt no wider
+    than 0.5 m (measured 0.16 m)."""
     drive, vehicle = _box_misplaced("race_lap", -1.0)
     est = fuse(drive, vehicle, smooth=True)
     p = est.params

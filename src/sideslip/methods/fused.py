@@ -868,22 +868,27 @@ def _checked_smoother(drive: Drive, vehicle: Vehicle, nz: FusedSettings) -> _Che
     note = box.note()
     # no slow turns: the Doppler with the tyres profiles the box (fused_box_profile)
     bursts = int(p.get("gnss_doppler_burst_epochs") or 0)
+    # the profile keeps between antenna and IMU the offset the tyre-free pass read where no
+    # check moved either, beyond the pass's gate or not (fused_box_profile.profile_box)
+    pair = unresolved
+    read = p.get("gnss_lever_x_tyre_free_m")
+    if read is not None and math.isfinite(float(read)) and not (imu_x or ant_x):
+        pair = float(read)
     profile = None
     if not math.isfinite(box.sigma_m):
-        profile = _box_profile(drive, settled, nz, timing, bursts, unresolved)
+        profile = _box_profile(drive, settled, nz, timing, bursts, pair)
     if profile is not None:
         extra.update(profile.params())
         note = f"{note}; {profile.note()}"
     if box.applied or (profile is not None and profile.applied):
-        # the antenna by d; the IMU by d less the relative offset the tyre-free pass found and
-        # no check took (antenna and IMU keep the place against each other the pass saw; the
-        # profile scored them so)
+        # the antenna by d; the IMU by d less the relative offset the tyre-free pass found
+        # (the slow turns) or read (the profile) and no check took: antenna and IMU keep the
+        # place against each other the pass saw, as the profile scored them
         if box.applied:
-            d, sigma_m = box.d_m, box.sigma_m
+            d, sigma_m, imu_d = box.d_m, box.sigma_m, box.d_m - unresolved
         else:
             assert profile is not None
-            d, sigma_m = profile.d_m, profile.spread_m
-        imu_d = d - unresolved
+            d, sigma_m, imu_d = profile.d_m, profile.spread_m, profile.d_m - pair
         x, y, z = (float(c) for c in settled.gnss_xyz)
         moved = imu_moved(dataclasses.replace(settled, gnss_xyz=(x + d, y, z)), imu_d)
         nz_box = dataclasses.replace(nz, check_doppler_lever=False)
@@ -922,12 +927,12 @@ def _box_profile(
     nz: FusedSettings,
     timing: DopplerTiming | None,
     bursts: int,
-    unresolved: float,
+    pair: float,
 ) -> BoxProfile | None:
     """The tyres' profile of the box's place (:mod:`sideslip.methods.fused_box_profile`):
     the antenna of ``vehicle`` (the installation the first checks settled on) moved by ``d``
-    and its IMU by ``d - unresolved`` (the antenna's offset from the IMU that the tyre-free
-    pass found and no check took), each place scored by a smoother run that stops at its
+    and its IMU by ``d - pair`` (the antenna's offset from the IMU that the tyre-free pass
+    read and no check took), each place scored by a smoother run that stops at its
     Doppler ``-2 log L``, with the Doppler's checks off as in :func:`_latency_profile`
     (``bursts``: the epochs the file's run found in multipath bursts, which then score too);
     None where switched off or the drive has no Doppler to score."""
@@ -945,8 +950,8 @@ def _box_profile(
     if not math.isfinite(at_file):
         return None
     return profile_box(
-        lambda d: score(d, d - unresolved), at_file, nz.box_profile_step_m, nz.box_profile_max_m,
-        nz.doppler_lever_z, bursts, None if unresolved == 0.0 else score(0.0, -unresolved),
+        lambda d: score(d, d - pair), at_file, nz.box_profile_step_m, nz.box_profile_max_m,
+        nz.doppler_lever_z, bursts, None if pair == 0.0 else score(0.0, -pair),
     )  # fmt: skip
 
 

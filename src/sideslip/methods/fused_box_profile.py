@@ -147,31 +147,31 @@ def profile_box(
     """Score the box ``d`` m ahead of the file's place (``score(d)``: the Doppler's ``-2 log
     L`` with the tyres; ``neg2ll_file`` at the installation the first checks settled on, and
     ``neg2ll_zero`` at ``d = 0`` where that is another installation, else None) outwards in
-    steps of ``step_m`` on each side while that side's last score lies within ``z_gate^2`` of
-    the lowest (at most ``max_m`` out), then refine the minimum by a parabola through it and
-    its neighbours.
+    steps of ``step_m`` on each side, one step at least, while that side's last score lies
+    within ``z_gate^2`` of the lowest (at most ``max_m`` out), then refine the minimum by a
+    parabola through it and its neighbours.
 
-    The box moves antenna and IMU by the same ``d``; where the antenna check found the antenna
-    off the IMU by ``dl`` and took neither move, the caller's ``score`` keeps that offset
-    between them (the antenna at ``d``, the IMU at ``d - dl``, as
-    :mod:`sideslip.methods.fused_box` moves them).  An offset the pass did not find beyond
-    its gate is not kept: with the antenna alone 0.5 m ahead, dlc_bank's pass read +0.44 m
-    with the rough file, not beyond its gate, and the box moved by +0.84 m took the IMU with
-    the antenna (0.054 -> 0.123 deg; benchmarks/results/installation_offsets.md)."""
+    The box moves antenna and IMU by the same ``d``; where no check moved either, the
+    caller's ``score`` keeps between them the offset ``dl`` that the antenna check's tyre-free
+    pass read, beyond that pass's gate or not (the antenna at ``d``, the IMU at ``d - dl``),
+    so that one sensor off the file's place is one of the places scored.  Moving both by the
+    same ``d`` from the file's places instead, an antenna alone 0.5 m ahead (dlc_bank, rough
+    file: the pass read +0.44 m, inside its gate) was taken for a box +0.84 m ahead and the
+    IMU moved with it (0.054 -> 0.123 deg), and an IMU alone 1 m ahead (demo: the pass read
+    -0.57 m) for a box 1 m behind (0.017 -> 0.113; benchmarks/results/fused_accuracy.md,
+    session 35)."""
     scan: dict[float, float] = {0.0: float(neg2ll_file if neg2ll_zero is None else neg2ll_zero)}
     gate = z_gate**2
     for side in (-1.0, 1.0):
+        # one step at least on each side: a side is not skipped because the other fell
+        # further (the race lap with the box 1 m ahead and the rough file fell by 31 at
+        # -0.5 m and by 79 at +1 m)
         d = 0.0
-        while abs(d) + step_m <= max_m + 1e-9 and scan[d] <= min(scan.values()) + gate:
+        while abs(d) + step_m <= max_m + 1e-9:
             d = round(d + side * step_m, 9)
             scan[d] = float(score(d))
-    # the other side again: a minimum found on the second side can bring the first side's
-    # last score back inside the gate
-    for side in (-1.0, 1.0):
-        d = min(scan) if side < 0 else max(scan)
-        while abs(d) + step_m <= max_m + 1e-9 and scan[d] <= min(scan.values()) + gate:
-            d = round(d + side * step_m, 9)
-            scan[d] = float(score(d))
+            if scan[d] > min(scan.values()) + gate:
+                break
     best = min(scan, key=scan.__getitem__)
     vertex, sigma = _vertex(scan, best)
     if math.isfinite(sigma) and min(abs(vertex - d) for d in scan) > REFINE_MIN_M:
