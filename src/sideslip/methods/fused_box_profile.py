@@ -15,15 +15,19 @@ noise it identifies itself, as :mod:`sideslip.methods.fused_latency` scores a la
 the box moved by ``d`` along x, on a grid of ``step_m`` from 0 outwards on each side until the
 score has risen ``z_gate^2`` above its lowest point (or ``max_m`` is reached); a parabola
 through the best point and its neighbours places the minimum, and its curvature the sigma.
-The box is moved where the minimum lowers ``-2 log L`` below the file's place by more than
-``z_gate^2`` (the installation checks' gate).
+The box is moved where the minimum lowers ``-2 log L`` below the file's place, and below the
+scan's own 0, by more than ``z_gate^2`` (the installation checks' gate), on a drive whose
+Doppler carries no multipath bursts.  The IMU keeps against the antenna the offset the antenna
+check's tyre-free pass read (:func:`profile_box`), so one sensor off is one of the places
+scored.
 
 Where it is not moved, the place is still doubtful by the profile's own reading: the minimum
 lies ``d_min`` from the file's place, known to ``sigma``, so ``beta_std`` carries
 ``hypot(sigma, d_min) |r| / v`` (:attr:`BoxProfile.spread_m`); where it is moved, ``sigma``.
 
-Measured (simulator, seed 0, 11 own scenarios x the right / 30 %-soft / rough file, box
-scored at 0, +-0.5 ... +-2 m; ``-2 log L`` against the file's place): with the box 1 m ahead
+Measured (simulator, seed 0, 11 own scenarios x the right / 30 %-soft / rough file, antenna
+and IMU moved together and scored at 0, +-0.5 ... +-2 m; ``-2 log L`` against the file's
+place): with the box 1 m ahead
 the race lap falls by 64-71 at +1 m, banked_turn by 41-62, urban_highway by 52-190; with the
 installation right no profile fell by more than 9 except urban_highway with the rough file
 (22 at +0.5 m).  Many profiles are flat within a few units over a metre (two_turns_gyro_sf,
@@ -51,14 +55,13 @@ class BoxProfile:
     ahead of the file's place, -2 log L) pairs in order of d, 0 among them), the place
     ``d_m`` at the minimum with its 1-sigma ``sigma_m`` (m; inf where the profile does not
     bend up around it), the gate ``z_gate``, ``-2 log L`` at the installation the first
-    checks settled on (``neg2ll_file``: the scan's 0 unless the antenna check saw the antenna
-    off the IMU by an offset it did not take, which the scan keeps between them; see
-    :func:`profile_box`), and the Doppler epochs the file's run found in
-    multipath bursts (``burst_epochs``): the scoring runs take every epoch as it comes (the
-    Doppler's checks off, so that each place is scored on the same data), so on such a drive
-    the bursts score too, and the box is not moved (cr_limit_slalom seed 1, 71 burst epochs:
-    the profile fell by 18 at +0.89 m with the box where the file says, and moving it took
-    beta from 0.10 to 1.12 deg)."""
+    checks settled on (``neg2ll_file``: the scan's 0 unless the scan keeps an offset between
+    antenna and IMU that no check took; see :func:`profile_box`), and the Doppler epochs the
+    file's run found in multipath bursts (``burst_epochs``): the scoring runs take every epoch
+    as it comes (the Doppler's checks off, so that each place is scored on the same data), so
+    on such a drive the bursts score too, and the box is not moved (cr_limit_slalom seed 1,
+    71 burst epochs: the profile fell by 18 at +0.89 m with the box where the file says, and
+    moving it took beta from 0.10 to 1.12 deg)."""
 
     scan: tuple[tuple[float, float], ...]
     d_m: float
